@@ -1,0 +1,110 @@
+// Command-line helpers.
+#include "cli_common.h"
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+#include <sstream>
+#include <unistd.h>
+
+namespace rayfarm::cli {
+
+std::string display_name(const std::string& path) { return path == "-" ? "<stdin>" : path; }
+
+std::optional<std::string> read_input(const std::string& path) {
+  if (path == "-") {
+    std::ostringstream s;
+    s << std::cin.rdbuf();
+    return s.str();
+  }
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    std::cerr << "rayfarm: " << path << ": is a directory\n";
+    return std::nullopt;
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    std::cerr << "rayfarm: cannot open " << path << ": " << std::strerror(errno) << "\n";
+    return std::nullopt;
+  }
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+bool write_output(const std::string& path, const void* data, size_t size) {
+  if (path == "-") {
+    std::fwrite(data, 1, size, stdout);
+    return std::fflush(stdout) == 0;
+  }
+  std::string tmp = path + ".tmp" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    out.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+    if (!out.flush()) {
+      std::cerr << "rayfarm: cannot write " << path << ": " << std::strerror(errno) << "\n";
+      std::filesystem::remove(tmp);
+      return false;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::cerr << "rayfarm: cannot write " << path << ": " << ec.message() << "\n";
+    std::filesystem::remove(tmp, ec);
+    return false;
+  }
+  return true;
+}
+
+void OptionFlags::add_to(CLI::App& app) {
+  for (const OptionSpec& spec : option_specs()) {
+    std::string name(spec.name);
+    std::string dashed = name;
+    for (char& c : dashed)
+      if (c == '_') c = '-';
+    std::string flags = "--" + dashed + (dashed != name ? ",--" + name : "");
+    app.add_option_function<std::string>(
+           flags, [this, name](const std::string& v) { values[name] = v; },
+           std::string(spec.help))
+        ->type_name(std::string(spec.value_help));
+  }
+}
+
+OptionSet OptionFlags::as_set() const {
+  OptionSet set;
+  for (const OptionSpec& spec : option_specs()) {
+    auto it = values.find(std::string(spec.name));
+    if (it != values.end()) set.push_back({it->first, it->second, {0, 0, "--" + it->first}});
+  }
+  return set;
+}
+
+std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
+                                        bool print_warnings) {
+  LoadedScene loaded = load_scene(text);
+  Diagnostics shown;
+  for (const Diagnostic& d : loaded.diags.items())
+    if (d.severity == Severity::error || print_warnings)
+      std::cerr << format_diagnostic(d, display_name(path), text);
+  if (loaded.diags.truncated())
+    std::cerr << display_name(path) << ": note: too many errors (" << loaded.diags.error_count()
+              << "); only the first " << Diagnostics::kMaxErrors << " are shown\n";
+  if (loaded.diags.has_errors() || !loaded.scene) return std::nullopt;
+  return loaded;
+}
+
+std::optional<RenderOptions> resolve_options(const Scene& scene, const OptionFlags& flags) {
+  RenderOptions options;
+  Diagnostics diags;
+  apply_options(options, scene.render, diags);
+  apply_options(options, flags.as_set(), diags);
+  for (const Diagnostic& d : diags.items())
+    std::cerr << "rayfarm: error: " << (d.where.path.empty() ? "" : d.where.path + ": ")
+              << d.message << "\n";
+  if (diags.has_errors()) return std::nullopt;
+  return options;
+}
+
+}  // namespace rayfarm::cli

@@ -1,0 +1,106 @@
+// `rayfarm render SCENE [-o OUT] [options]`: renders locally on this machine's cores.
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <unistd.h>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "progress_bar.h"
+#include "rayfarm/image_io.h"
+#include "rayfarm/render.h"
+
+namespace rayfarm::cli {
+namespace {
+
+struct RenderArgs {
+  std::string scene;
+  std::string out;
+  int threads = 0;
+  bool quiet = false;
+  OptionFlags flags;
+};
+
+std::string default_output(const std::string& scene) {
+  if (scene == "-") return "out.png";
+  return std::filesystem::path(scene).filename().replace_extension(".png").string();
+}
+
+ImageFormat format_for(const std::string& out, const OptionFlags& flags) {
+  if (flags.values.count("format")) return flags.values.at("format") == "ppm" ? ImageFormat::ppm
+                                                                              : ImageFormat::png;
+  std::string ext = std::filesystem::path(out).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".ppm" ? ImageFormat::ppm : ImageFormat::png;
+}
+
+std::string si(double v) {
+  char buf[32];
+  if (v >= 1e9) std::snprintf(buf, sizeof buf, "%.2f G", v / 1e9);
+  else if (v >= 1e6) std::snprintf(buf, sizeof buf, "%.2f M", v / 1e6);
+  else if (v >= 1e3) std::snprintf(buf, sizeof buf, "%.1f k", v / 1e3);
+  else std::snprintf(buf, sizeof buf, "%.0f ", v);
+  return buf;
+}
+
+void print_summary(const std::string& out, int w, int h, const RenderStats& st, double total_ms) {
+  double secs = st.render_ms / 1000;
+  std::string parts;
+  for (const std::string& p : st.parts) parts += (parts.empty() ? "" : ",") + p;
+  std::fprintf(stderr, "%s: %dx%d, spp %d", out == "-" ? "<stdout>" : out.c_str(), w, h,
+               st.spp_done);
+  if (st.spp_done != st.spp_target) std::fprintf(stderr, "/%d (%s)", st.spp_target,
+                                                 st.stop_reason.c_str());
+  std::fprintf(stderr, ", %.1f ms (render %.1f ms), %srays/s (%s primary, %s shadow, %s reflection)",
+               total_ms, st.render_ms, si(secs > 0 ? st.total_rays() / secs : 0).c_str(),
+               si(st.primary_rays).c_str(), si(st.shadow_rays).c_str(),
+               si(st.reflection_rays).c_str());
+  if (st.error_estimate >= 0) std::fprintf(stderr, ", error estimate %.3f levels", st.error_estimate);
+  std::fprintf(stderr, "; parts: %s\n", parts.c_str());
+}
+
+}  // namespace
+
+Runner add_render(CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  app.add_option("scene", args->scene, "scene file (model or JSON; - for stdin)")->required();
+  app.add_option("-o,--output", args->out,
+                 "output image: .png or .ppm, - for standard output (default: SCENE.png)");
+  app.add_option("--threads", args->threads, "render threads (default: all cores)")
+      ->check(CLI::Range(0, 1024));
+  app.add_flag("-q,--quiet", args->quiet, "no summary line");
+  args->flags.add_to(app);
+  return [args]() -> int {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto text = read_input(args->scene);
+    if (!text) return kInputError;
+    auto loaded = load_checked(args->scene, *text, false);
+    if (!loaded) return kInputError;
+    auto options = resolve_options(*loaded->scene, args->flags);
+    if (!options) return kInputError;
+    std::string out = args->out.empty() ? default_output(args->scene) : args->out;
+    options->format = format_for(out, args->flags);
+
+    ProgressBar bar(isatty(STDERR_FILENO) && !args->quiet);
+    RenderStats stats;
+    std::string error;
+    Image image = render_image(*loaded->scene, *options, args->threads, &stats,
+                               [&bar](const RenderStats& s) { bar.update(s.progress(), s); },
+                               nullptr, &error);
+    bar.finish();
+    if (!error.empty()) {
+      std::cerr << "rayfarm: error: " << error << "\n";
+      return kInputError;
+    }
+    auto bytes = encode_image(image, options->format);
+    if (!write_output(out, bytes.data(), bytes.size())) return kInputError;
+    double total_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    if (!args->quiet) print_summary(out, image.width, image.height, stats, total_ms);
+    return kOk;
+  };
+}
+
+}  // namespace rayfarm::cli

@@ -1,0 +1,16 @@
+// The subcommands of `rayfarm`: each registers its flags and returns its runner.
+#pragma once
+
+#include <functional>
+
+#include <CLI/CLI.hpp>
+
+namespace rayfarm::cli {
+
+using Runner = std::function<int()>;
+
+Runner add_render(CLI::App& app);
+Runner add_check(CLI::App& app);
+Runner add_convert(CLI::App& app);
+
+}  // namespace rayfarm::cli

@@ -1,0 +1,59 @@
+// Structured errors and warnings about scene input: what went wrong and where.
+#pragma once
+
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace rayfarm {
+
+// Where a piece of input came from: line/column (1-based, 0 = unknown) for model files and
+// JSON syntax errors, a JSON pointer ("/objects/2/radius") for JSON values.
+struct Where {
+  int line = 0;
+  int column = 0;
+  std::string path;
+};
+
+enum class Severity { error, warning };
+
+struct Diagnostic {
+  Severity severity = Severity::error;
+  std::string code;     // stable, machine-readable: "unknown-attribute", "missing-attribute", ...
+  std::string message;  // one line, includes any suggestion
+  Where where;
+};
+
+// Collects diagnostics up to a cap, so a garbage file cannot produce megabytes of errors.
+class Diagnostics {
+ public:
+  static constexpr size_t kMaxErrors = 50;
+
+  void error(std::string code, std::string message, Where where);
+  void warning(std::string code, std::string message, Where where);
+
+  bool has_errors() const { return errors_ > 0; }
+  size_t error_count() const { return errors_; }
+  bool truncated() const { return truncated_; }
+  const std::vector<Diagnostic>& items() const { return items_; }
+  const Diagnostic* first_error() const;
+
+ private:
+  std::vector<Diagnostic> items_;
+  size_t errors_ = 0;
+  bool truncated_ = false;
+};
+
+// "FILE:LINE:COL: error: MESSAGE", then the source line and a caret under the column.
+// JSON-path diagnostics print as "FILE: error: at /path: MESSAGE".
+std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
+                              std::string_view source);
+std::string format_diagnostics(const Diagnostics& ds, std::string_view file_name,
+                               std::string_view source);
+
+// The candidate closest to `word` by edit distance, or empty when none is close enough
+// to be a plausible typo.
+std::string nearest_word(std::string_view word, std::span<const std::string_view> candidates);
+
+}  // namespace rayfarm

@@ -1,0 +1,28 @@
+// Encoding and decoding images: PNG (stb_image_write with libdeflate as its compressor,
+// stb_image to read) and binary PPM (P6; P3 is read too).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rayfarm/image.h"
+#include "rayfarm/options.h"
+
+namespace rayfarm {
+
+// The encoders throw std::invalid_argument when `rgb` is not width*height*3 bytes long; PNG
+// also for an empty image or one too large for stb_image_write's int arithmetic (~350 Mpixel).
+std::vector<unsigned char> encode_png(const Image& image);
+std::vector<unsigned char> encode_ppm(const Image& image);
+std::vector<unsigned char> encode_image(const Image& image, ImageFormat format);
+
+// Decodes PNG or PPM (told apart by their signatures). Images with alpha or grey are
+// converted to RGB. On failure returns nullopt and sets `error`.
+std::optional<Image> decode_image(std::string_view bytes, std::string* error);
+
+// Upper bound on pixels decode_image accepts, to keep hostile headers from allocating.
+constexpr long long kMaxDecodePixels = 64LL * 1024 * 1024;
+
+}  // namespace rayfarm

@@ -1,0 +1,26 @@
+// One call from scene text to a checked scene: format detection, parsing, building.
+#pragma once
+
+#include <optional>
+#include <string_view>
+
+#include "rayfarm/diagnostic.h"
+#include "rayfarm/scene.h"
+#include "rayfarm/scene_desc.h"
+
+namespace rayfarm {
+
+enum class SceneFormat { model, json };
+
+// JSON when the first non-blank character is '{', a model file otherwise.
+SceneFormat detect_format(std::string_view text);
+
+struct LoadedScene {
+  SceneDesc desc;
+  std::optional<Scene> scene;  // set when there were no errors
+  Diagnostics diags;
+};
+
+LoadedScene load_scene(std::string_view text);
+
+}  // namespace rayfarm

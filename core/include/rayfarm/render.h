@@ -1,0 +1,69 @@
+// Rendering a scene: a job cut into tiles and passes (one sample per pixel per pass, so the
+// image and its error estimate improve evenly), run by any number of threads. The server
+// schedules tiles of many jobs on its pool; render_image() runs one job on threads it owns.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rayfarm/image.h"
+#include "rayfarm/options.h"
+#include "rayfarm/scene.h"
+
+namespace rayfarm {
+
+struct RenderStats {
+  std::uint64_t primary_rays = 0;
+  std::uint64_t shadow_rays = 0;
+  std::uint64_t reflection_rays = 0;
+  double prepare_ms = 0;
+  double render_ms = 0;  // from the first tile to the last
+  int spp_done = 0;      // complete passes
+  int spp_target = 1;
+  int tiles_done = 0;     // in the current pass
+  int tiles_per_pass = 0;
+  double error_estimate = -1;  // standard error of the pixel means, 8-bit levels; -1: n/a
+  std::vector<std::string> parts;  // pipeline parts this render runs
+  std::string stop_reason;         // "spp", "target_error", "time_limit", "canceled"
+  bool finished = false;
+
+  std::uint64_t total_rays() const { return primary_rays + shadow_rays + reflection_rays; }
+  double progress() const;  // 0..1
+};
+
+class RenderJob {
+ public:
+  // Prepares the scene for these options. Returns nullptr with `error` set when the options
+  // do not fit the scene (unknown camera).
+  static std::unique_ptr<RenderJob> create(const Scene& scene, const RenderOptions& options,
+                                           std::string* error);
+  virtual ~RenderJob() = default;
+
+  enum class Step { ran, wait, done };
+  // Claims one tile and renders it. `wait`: no tile can start until others of this pass
+  // finish. `done`: finished or canceled. Safe to call from many threads.
+  virtual Step run_step() = 0;
+
+  virtual void cancel() = 0;
+  virtual bool canceled() const = 0;
+  virtual bool finished() const = 0;
+  virtual RenderStats stats() const = 0;
+  // The final image when finished; the image so far otherwise (unrendered tiles black).
+  virtual Image image() const = 0;
+  virtual int width() const = 0;
+  virtual int height() const = 0;
+};
+
+// Renders on `threads` threads of its own (0: all cores). `on_progress` is called from a
+// worker after each tile; `cancel` is polled. Returns an empty image with `error` set when
+// the job cannot start.
+Image render_image(const Scene& scene, const RenderOptions& options, int threads,
+                   RenderStats* stats = nullptr,
+                   const std::function<void(const RenderStats&)>& on_progress = {},
+                   const std::atomic<bool>* cancel = nullptr, std::string* error = nullptr);
+
+}  // namespace rayfarm

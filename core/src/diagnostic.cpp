@@ -1,0 +1,123 @@
+// Diagnostics: collection with a cap, clang-style formatting, typo suggestions.
+#include "rayfarm/diagnostic.h"
+
+#include <algorithm>
+#include <sstream>
+
+namespace rayfarm {
+
+void Diagnostics::error(std::string code, std::string message, Where where) {
+  ++errors_;
+  if (errors_ > kMaxErrors) {
+    truncated_ = true;
+    return;
+  }
+  items_.push_back({Severity::error, std::move(code), std::move(message), std::move(where)});
+}
+
+void Diagnostics::warning(std::string code, std::string message, Where where) {
+  if (items_.size() >= 2 * kMaxErrors) {
+    truncated_ = true;
+    return;
+  }
+  items_.push_back({Severity::warning, std::move(code), std::move(message), std::move(where)});
+}
+
+const Diagnostic* Diagnostics::first_error() const {
+  for (const Diagnostic& d : items_)
+    if (d.severity == Severity::error) return &d;
+  return nullptr;
+}
+
+namespace {
+
+std::string_view source_line(std::string_view source, int line) {
+  size_t start = 0;
+  for (int l = 1; l < line; ++l) {
+    size_t nl = source.find('\n', start);
+    if (nl == std::string_view::npos) return {};
+    start = nl + 1;
+  }
+  size_t end = source.find('\n', start);
+  std::string_view text = source.substr(start, end == std::string_view::npos ? source.size() - start
+                                                                              : end - start);
+  if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+  return text;
+}
+
+}  // namespace
+
+std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
+                              std::string_view source) {
+  std::ostringstream out;
+  const char* kind = d.severity == Severity::error ? "error" : "warning";
+  out << file_name;
+  if (d.where.line > 0) out << ':' << d.where.line << ':' << d.where.column;
+  out << ": " << kind << ": ";
+  if (!d.where.path.empty()) out << "at " << d.where.path << ": ";
+  out << d.message << '\n';
+  if (d.where.line > 0) {
+    std::string_view text = source_line(source, d.where.line);
+    if (!text.empty() && text.size() <= 400) {
+      out << "  " << text << "\n  ";
+      // Keep tabs so the caret lines up under the offending column.
+      for (int i = 1; i < d.where.column && i <= static_cast<int>(text.size()); ++i)
+        out << (text[i - 1] == '\t' ? '\t' : ' ');
+      out << "^\n";
+    }
+  }
+  return out.str();
+}
+
+std::string format_diagnostics(const Diagnostics& ds, std::string_view file_name,
+                               std::string_view source) {
+  std::string out;
+  for (const Diagnostic& d : ds.items()) out += format_diagnostic(d, file_name, source);
+  if (ds.truncated())
+    out += std::string(file_name) + ": note: too many errors; " +
+           std::to_string(ds.error_count()) + " in all, only the first " +
+           std::to_string(Diagnostics::kMaxErrors) + " shown\n";
+  return out;
+}
+
+namespace {
+
+size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diagonal = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      size_t above = row[j];
+      size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + cost});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+}  // namespace
+
+std::string nearest_word(std::string_view word, std::span<const std::string_view> candidates) {
+  if (word.size() > 64) return {};
+  std::string lower(word);
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::string_view best;
+  size_t best_distance = SIZE_MAX;
+  for (std::string_view c : candidates) {
+    size_t d = edit_distance(lower, c);
+    if (d < best_distance) {
+      best_distance = d;
+      best = c;
+    }
+  }
+  // A typo is a small share of the word: "radious" -> "radius", but "foo" suggests nothing.
+  size_t allowed = std::max<size_t>(1, std::min(word.size(), best.size()) / 3);
+  if (best.empty() || best_distance > allowed) return {};
+  return std::string(best);
+}
+
+}  // namespace rayfarm

@@ -1,0 +1,250 @@
+// Encoding and decoding PNG (through the stb wrappers) and PPM (here: the format is tiny).
+#include "rayfarm/image_io.h"
+
+#include <algorithm>
+#include <climits>
+#include <cstdint>
+#include <new>
+#include <stdexcept>
+
+#include "stb_wrappers.h"
+
+namespace rayfarm {
+namespace {
+
+constexpr std::string_view kPngSignature("\x89PNG\r\n\x1a\n", 8);
+
+std::string size_text(long long width, long long height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
+std::optional<Image> fail(std::string* error, std::string message) {
+  if (error) *error = std::move(message);
+  return std::nullopt;
+}
+
+void check_buffer(const Image& image) {
+  if (image.width < 0 || image.height < 0 ||
+      image.rgb.size() != static_cast<std::size_t>(image.width) * image.height * 3) {
+    throw std::invalid_argument("image buffer of " + std::to_string(image.rgb.size()) +
+                                " bytes does not match its size " +
+                                size_text(image.width, image.height));
+  }
+}
+
+// Checked before anything is allocated for the pixels. Each side is below 2^32, so the
+// product cannot overflow.
+std::optional<std::string> size_problem(std::uint64_t width, std::uint64_t height) {
+  if (width == 0 || height == 0) return "image has no pixels (" + size_text(width, height) + ")";
+  if (width * height > static_cast<std::uint64_t>(kMaxDecodePixels)) {
+    return "image too large: " + size_text(width, height) + " is over the limit of " +
+           std::to_string(kMaxDecodePixels) + " pixels";
+  }
+  return std::nullopt;
+}
+
+std::uint32_t read_be32(std::string_view bytes, std::size_t at) {
+  std::uint32_t value = 0;
+  for (std::size_t i = 0; i < 4; ++i)
+    value = value << 8 | static_cast<unsigned char>(bytes[at + i]);
+  return value;
+}
+
+// stb_image memcpy()s from a null pointer for an empty IDAT chunk before any image data
+// (undefined behaviour, found by fuzzing). Empty IDATs carry nothing: the copy drops them all.
+std::optional<std::string> without_empty_idats(std::string_view png) {
+  std::string out;
+  std::size_t copied = 0;  // bytes of `png` already in `out`
+  for (std::size_t at = 8; png.size() - at >= 12;) {
+    std::uint32_t length = read_be32(png, at);
+    if (length == 0 && png.substr(at + 4, 4) == "IDAT") {
+      out.append(png.substr(copied, at - copied));
+      copied = at + 12;
+    }
+    if (length > png.size() - at - 12) break;
+    at += 12 + length;
+  }
+  if (copied == 0) return std::nullopt;
+  out.append(png.substr(copied));
+  return out;
+}
+
+std::optional<Image> decode_png(std::string_view bytes, std::string* error) {
+  // IHDR is read here so that a hostile size is refused before stb allocates anything.
+  if (bytes.size() < 8 + 8 + 13 || read_be32(bytes, 8) != 13 || bytes.substr(12, 4) != "IHDR") {
+    return fail(error, "corrupt PNG: no IHDR chunk after the signature");
+  }
+  std::uint64_t width = read_be32(bytes, 16);
+  std::uint64_t height = read_be32(bytes, 20);
+  if (auto problem = size_problem(width, height)) return fail(error, *problem);
+  if (bytes.size() > INT_MAX) return fail(error, "PNG file too large to decode");
+  auto cleaned = without_empty_idats(bytes);
+  if (cleaned) bytes = *cleaned;
+  // No legitimate stb allocation exceeds twice the input (the IDAT buffer doubles) or twice
+  // the raw image at its widest (16-bit RGBA plus a filter byte per row; inflate doubles).
+  std::size_t raw = width * height * 8 + height;
+  std::size_t alloc_limit = std::max(2 * bytes.size(), 2 * raw) + 65536;
+  auto png = stb::decode_png_rgb(reinterpret_cast<const unsigned char*>(bytes.data()),
+                                 static_cast<int>(bytes.size()), alloc_limit);
+  if (png.rgb.empty()) {
+    // With the limit above, running out of memory almost always means hostile sizes.
+    if (png.error == "outofmem") return fail(error, "cannot decode PNG: data larger than its size");
+    return fail(error, "cannot decode PNG: " + png.error);
+  }
+  Image image;
+  image.width = png.width;
+  image.height = png.height;
+  image.rgb = std::move(png.rgb);
+  return image;
+}
+
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f';
+}
+
+// A decimal number in a PPM header or P3 body, after whitespace and '#' comments.
+struct PpmNumber {
+  enum Kind { ok, missing, malformed } kind;
+  std::uint64_t value;  // saturates at UINT32_MAX, so that width * height cannot overflow
+};
+
+PpmNumber read_number(std::string_view s, std::size_t& pos) {
+  while (pos < s.size() && (is_space(s[pos]) || s[pos] == '#')) {
+    if (s[pos] == '#') {
+      while (pos < s.size() && s[pos] != '\n' && s[pos] != '\r') ++pos;
+    } else {
+      ++pos;
+    }
+  }
+  if (pos == s.size()) return {PpmNumber::missing, 0};
+  std::uint64_t value = 0;
+  std::size_t start = pos;
+  for (; pos < s.size() && s[pos] >= '0' && s[pos] <= '9'; ++pos) {
+    value = std::min<std::uint64_t>(value * 10 + (s[pos] - '0'), UINT32_MAX);
+  }
+  if (pos == start || (pos < s.size() && !is_space(s[pos]) && s[pos] != '#')) {
+    return {PpmNumber::malformed, 0};
+  }
+  return {PpmNumber::ok, value};
+}
+
+std::optional<Image> decode_ppm(std::string_view s, std::string* error) {
+  bool ascii = s[1] == '3';
+  std::size_t pos = 2;
+  if (pos < s.size() && !is_space(s[pos]) && s[pos] != '#') {
+    return fail(error, "bad PPM header: no whitespace after P" + std::string(1, s[1]));
+  }
+  std::uint64_t fields[3];  // width, height, maxval
+  const char* names[3] = {"width", "height", "maxval"};
+  for (int i = 0; i < 3; ++i) {
+    PpmNumber number = read_number(s, pos);
+    if (number.kind == PpmNumber::missing) {
+      return fail(error, std::string("truncated PPM header: no ") + names[i]);
+    }
+    if (number.kind == PpmNumber::malformed) {
+      return fail(error, std::string("bad PPM header: ") + names[i] + " is not a number");
+    }
+    fields[i] = number.value;
+  }
+  std::uint64_t width = fields[0], height = fields[1], maxval = fields[2];
+  if (auto problem = size_problem(width, height)) return fail(error, *problem);
+  if (maxval < 1 || maxval > 65535) {
+    return fail(error, "bad PPM header: maxval " + std::to_string(maxval) + " is not in 1..65535");
+  }
+  std::vector<std::uint8_t> to_8bit(maxval + 1);
+  for (std::uint64_t v = 0; v <= maxval; ++v) to_8bit[v] = (v * 255 + maxval / 2) / maxval;
+  auto too_big = [&](std::uint64_t v) {
+    return fail(error,
+                "PPM sample " + std::to_string(v) + " exceeds maxval " + std::to_string(maxval));
+  };
+
+  std::uint64_t samples = width * height * 3;
+  Image image;
+  image.width = static_cast<int>(width);
+  image.height = static_cast<int>(height);
+  if (ascii) {
+    // Grown as samples arrive, so a short file cannot make us allocate for its claimed size.
+    image.rgb.reserve(std::min<std::uint64_t>(samples, (s.size() - pos) / 2 + 1));
+    while (image.rgb.size() < samples) {
+      PpmNumber number = read_number(s, pos);
+      if (number.kind == PpmNumber::missing) {
+        return fail(error, "truncated PPM data: expected " + std::to_string(samples) +
+                               " samples, got " + std::to_string(image.rgb.size()));
+      }
+      if (number.kind == PpmNumber::malformed) {
+        return fail(error, "bad PPM data: sample " + std::to_string(image.rgb.size() + 1) +
+                               " is not a number");
+      }
+      if (number.value > maxval) return too_big(number.value);
+      image.rgb.push_back(to_8bit[number.value]);
+    }
+    return image;
+  }
+
+  // Exactly one whitespace character separates maxval from binary data.
+  if (pos == s.size() || !is_space(s[pos])) {
+    return fail(error, "bad PPM header: no whitespace after maxval");
+  }
+  ++pos;
+  std::uint64_t sample_bytes = maxval > 255 ? 2 : 1;
+  std::uint64_t expected = samples * sample_bytes;
+  if (s.size() - pos < expected) {
+    return fail(error, "truncated PPM data: expected " + std::to_string(expected) + " bytes, got " +
+                           std::to_string(s.size() - pos));
+  }
+  image.rgb.resize(samples);
+  const auto* data = reinterpret_cast<const unsigned char*>(s.data() + pos);
+  for (std::uint64_t i = 0; i < samples; ++i) {
+    std::uint64_t v = sample_bytes == 2 ? (data[2 * i] << 8 | data[2 * i + 1]) : data[i];
+    if (v > maxval) return too_big(v);
+    image.rgb[i] = to_8bit[v];
+  }
+  return image;
+}
+
+}  // namespace
+
+std::vector<unsigned char> encode_png(const Image& image) {
+  check_buffer(image);
+  if (image.width == 0 || image.height == 0) {
+    throw std::invalid_argument("a PNG cannot hold an empty image (" +
+                                size_text(image.width, image.height) + ")");
+  }
+  // stb_image_write sizes its buffers in int (shared/NOTES.md): stay well clear.
+  if ((3 * static_cast<std::uint64_t>(image.width) + 1) * image.height > (1u << 30)) {
+    throw std::invalid_argument("image too large for PNG encoding: " +
+                                size_text(image.width, image.height));
+  }
+  auto png = stb::encode_png(image.rgb.data(), image.width, image.height, 3);
+  if (png.empty()) throw std::bad_alloc();  // stb fails only when an allocation does
+  return png;
+}
+
+std::vector<unsigned char> encode_ppm(const Image& image) {
+  check_buffer(image);
+  std::string header =
+      "P6\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n255\n";
+  std::vector<unsigned char> out;
+  out.reserve(header.size() + image.rgb.size());
+  out.insert(out.end(), header.begin(), header.end());
+  out.insert(out.end(), image.rgb.begin(), image.rgb.end());
+  return out;
+}
+
+std::vector<unsigned char> encode_image(const Image& image, ImageFormat format) {
+  return format == ImageFormat::ppm ? encode_ppm(image) : encode_png(image);
+}
+
+std::optional<Image> decode_image(std::string_view bytes, std::string* error) {
+  if (bytes.starts_with(kPngSignature)) return decode_png(bytes, error);
+  if (bytes.size() >= 2 && bytes[0] == 'P' && (bytes[1] == '3' || bytes[1] == '6')) {
+    return decode_ppm(bytes, error);
+  }
+  if (bytes.size() >= 2 && bytes[0] == 'P' && bytes[1] >= '1' && bytes[1] <= '7') {
+    return fail(error, "unsupported Netpbm type P" + std::string(1, bytes[1]) +
+                           ": only PPM (P3, P6) is read");
+  }
+  return fail(error, "not a PNG or PPM image");
+}
+
+}  // namespace rayfarm

@@ -1,0 +1,79 @@
+// Scene lints.
+#include "rayfarm/lint.h"
+
+#include <glm/geometric.hpp>
+
+namespace rayfarm {
+namespace {
+
+std::string label(std::string_view kind, const std::string& name) {
+  return std::string(kind) + (name.empty() ? "" : " '" + name + "'");
+}
+
+bool is_black(const glm::dvec3& c) { return c.x <= 0 && c.y <= 0 && c.z <= 0; }
+
+}  // namespace
+
+void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
+  auto cam_index = scene.find_camera(options.camera);
+  if (!cam_index) {
+    diags.warning("unknown-camera", "no camera named '" + options.camera + "'", {});
+    return;
+  }
+  const Camera& cam = scene.cameras[*cam_index];
+  glm::dvec3 eye = cam.viewpoint;
+  glm::dvec3 centre{cam.world_width / 2, cam.world_height / 2, 0};
+  glm::dvec3 view = centre - eye;
+  bool has_view = glm::length(view) > 0;
+  if (has_view) view = glm::normalize(view);
+
+  for (const Light& l : scene.lights)
+    for (const Sphere& s : scene.spheres)
+      if (glm::length(l.location - s.center) < s.radius)
+        diags.warning("light-inside-sphere",
+                      label("light", l.name) + " is inside " + label("sphere", s.name) +
+                          ": it lights only that sphere's inside",
+                      l.where);
+
+  for (const Sphere& s : scene.spheres) {
+    if (glm::length(eye - s.center) < s.radius)
+      diags.warning("eye-inside-sphere",
+                    "the eye of " + label("camera", cam.name) + " is inside " +
+                        label("sphere", s.name),
+                    s.where);
+    else if (has_view && glm::dot(s.center - eye, view) < -s.radius)
+      diags.warning("behind-eye",
+                    label("sphere", s.name) + " is behind the eye of " +
+                        label("camera", cam.name) + " and cannot be seen directly",
+                    s.where);
+  }
+
+  std::vector<bool> used(scene.materials.size(), false);
+  for (const Sphere& s : scene.spheres) used[s.material] = true;
+  for (const Plane& p : scene.planes) used[p.material] = true;
+  for (size_t i = 0; i < scene.materials.size(); ++i)
+    if (!used[i])
+      diags.warning("unused-material",
+                    "material '" + scene.materials[i].name + "' is never used",
+                    scene.materials[i].where);
+
+  bool lit = false;
+  for (const Light& l : scene.lights) lit = lit || !is_black(l.emissivity);
+  bool any_ambient = false;
+  for (size_t i = 0; i < scene.materials.size(); ++i)
+    if (used[i]) any_ambient = any_ambient || !is_black(scene.materials[i].ambient);
+  bool objects = !scene.spheres.empty() || !scene.planes.empty();
+  glm::dvec3 bg{options.background[0], options.background[1], options.background[2]};
+  if (!objects && is_black(bg))
+    diags.warning("black-image", "the scene has no objects: the image is all background", {});
+  else if (objects && !lit && !any_ambient && is_black(bg))
+    diags.warning("black-image",
+                  scene.lights.empty()
+                      ? "nothing is lit: there are no lights and no ambient colour, the image "
+                        "is entirely black"
+                      : "nothing is lit: every light has zero emissivity and no material has "
+                        "ambient colour, the image is entirely black",
+                  {});
+}
+
+}  // namespace rayfarm

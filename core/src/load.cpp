@@ -1,0 +1,28 @@
+// Scene text to a checked scene.
+#include "rayfarm/load.h"
+
+#include "rayfarm/json_scene.h"
+#include "rayfarm/model_parser.h"
+
+namespace rayfarm {
+
+SceneFormat detect_format(std::string_view text) {
+  for (char c : text) {
+    if (c == ' ' || c == '\t' || c == '\n' || c == '\r') continue;
+    return c == '{' ? SceneFormat::json : SceneFormat::model;
+  }
+  return SceneFormat::model;
+}
+
+LoadedScene load_scene(std::string_view text) {
+  LoadedScene out;
+  out.desc = detect_format(text) == SceneFormat::json ? parse_json_scene(text, out.diags)
+                                                       : parse_model(text, out.diags);
+  // Build even after parse errors, so missing attributes and bad references are reported in
+  // the same pass; only input that did not parse at all (JSON syntax) stops here.
+  if (!out.diags.has_errors() || !out.desc.entities.empty())
+    out.scene = build_scene(out.desc, out.diags);
+  return out;
+}
+
+}  // namespace rayfarm

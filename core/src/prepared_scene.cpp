@@ -1,0 +1,99 @@
+// Scene preparation: conversion to the tracer's precision and the analysis of which
+// pipeline parts the render needs.
+#include "prepared_scene.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace rayfarm {
+namespace {
+
+// Doubles beyond float range become the largest float, never infinity.
+template <class T>
+T narrow(double v) {
+  constexpr double kMax = static_cast<double>(std::numeric_limits<T>::max());
+  return static_cast<T>(std::clamp(v, -kMax, kMax));
+}
+
+template <class T>
+Vec3<T> narrow(const glm::dvec3& v) {
+  return {narrow<T>(v.x), narrow<T>(v.y), narrow<T>(v.z)};
+}
+
+bool nonzero(const glm::dvec3& c) { return c.x > 0 || c.y > 0 || c.z > 0; }
+
+}  // namespace
+
+std::vector<std::string> Features::parts() const {
+  std::vector<std::string> out{"primary"};
+  if (lights) out.push_back("direct-light");
+  if (shadows) out.push_back("shadows");
+  if (highlight) out.push_back("highlight");
+  if (reflection) out.push_back("reflection");
+  if (supersampling) out.push_back("supersampling");
+  return out;
+}
+
+template <class T>
+PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera) {
+  const Camera& cam = scene.cameras.at(camera);
+  PreparedScene<T> p;
+  p.width = options.width > 0 ? options.width : cam.width;
+  p.height = options.height > 0 ? options.height : cam.height;
+  p.eye = narrow<T>(cam.viewpoint);
+  p.world_width = narrow<T>(cam.world_width);
+  p.world_height = narrow<T>(cam.world_height);
+  // A miss is a displayable colour; clamping here keeps every sample in [0, 1].
+  for (int c = 0; c < 3; ++c) p.background[c] = narrow<T>(std::clamp(options.background[c], 0.0, 1.0));
+  p.max_dist = narrow<T>(options.max_dist);
+  p.bailout = narrow<T>(options.bailout);
+  p.max_depth = options.max_depth;
+  p.blinn = options.highlight == Highlight::blinn;
+  p.spp = options.spp;
+  p.seed = options.seed;
+
+  for (const Material& m : scene.materials) {
+    PreparedMaterial<T> pm{narrow<T>(m.ambient), narrow<T>(m.diffuse), narrow<T>(m.specular),
+                           narrow<T>(m.shininess),
+                           narrow<T>(std::max({m.specular.x, m.specular.y, m.specular.z})),
+                           nonzero(m.specular), nonzero(m.specular)};
+    p.materials.push_back(pm);
+  }
+  for (const Sphere& s : scene.spheres)
+    p.spheres.push_back({narrow<T>(s.center), narrow<T>(s.radius), s.material});
+  for (const Plane& pl : scene.planes) {
+    glm::dvec3 n = glm::normalize(pl.normal);
+    p.planes.push_back({narrow<T>(n), narrow<T>(pl.point), pl.material});
+  }
+  bool any_light = false;
+  for (const Light& l : scene.lights) {
+    p.lights.push_back({narrow<T>(l.location), narrow<T>(l.emissivity)});
+    any_light = any_light || nonzero(l.emissivity);
+  }
+
+  bool objects = !p.spheres.empty() || !p.planes.empty();
+  bool reflective = false;
+  for (const Sphere& s : scene.spheres) reflective |= nonzero(scene.materials[s.material].specular);
+  for (const Plane& pl : scene.planes) reflective |= nonzero(scene.materials[pl.material].specular);
+
+  Features& f = p.features;
+  if (options.specialize) {
+    f.lights = any_light && objects;
+    f.shadows = options.shadows && f.lights;
+    f.highlight = f.lights && reflective;
+    f.reflection = reflective && options.max_depth > 0;
+  } else {
+    f.lights = true;
+    f.shadows = options.shadows;
+    f.highlight = true;
+    f.reflection = true;
+    for (auto& m : p.materials) m.reflects = m.highlights = true;
+  }
+  f.supersampling = options.spp > 1;
+  return p;
+}
+
+template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOptions&, int);
+template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int);
+
+}  // namespace rayfarm

@@ -1,0 +1,220 @@
+// From a parsed SceneDesc to a checked Scene: required attributes, value ranges, names,
+// material references and the camera rule (SPEC §1), reported for model and JSON alike.
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "rayfarm/scene.h"
+#include "rayfarm/schema.h"
+
+namespace rayfarm {
+namespace {
+
+std::string describe_entity(const EntityDesc& e) {
+  std::string s(entity_spec(e.kind).keyword);
+  if (!e.name.empty()) s += " '" + e.name + "'";
+  return s;
+}
+
+std::string position_text(const Where& w) {
+  if (w.line > 0) return "line " + std::to_string(w.line);
+  return w.path;
+}
+
+class SceneBuilder {
+ public:
+  explicit SceneBuilder(Diagnostics& diags) : diags_(diags) {}
+
+  std::optional<Scene> build(const SceneDesc& desc) {
+    Scene scene;
+    // Materials first: a sphere may use a material defined after it.
+    for (const EntityDesc& e : desc.entities)
+      if (e.kind == EntityKind::material) add_material(e, scene);
+    for (const EntityDesc& e : desc.entities) {
+      check_required(e);
+      switch (e.kind) {
+        case EntityKind::camera: add_camera(e, scene); break;
+        case EntityKind::material: break;
+        case EntityKind::light: add_light(e, scene); break;
+        case EntityKind::sphere: add_sphere(e, scene); break;
+        case EntityKind::plane: add_plane(e, scene); break;
+      }
+    }
+    if (scene.cameras.empty() && !had_camera_)
+      diags_.error("no-camera", "no camera: a scene needs at least one camera", {});
+    RenderOptions scratch;
+    apply_options(scratch, desc.render, diags_);
+    scene.render = desc.render;
+    if (diags_.has_errors()) return std::nullopt;
+    return scene;
+  }
+
+ private:
+  void check_required(const EntityDesc& e) {
+    for (const AttrSpec& a : entity_spec(e.kind).attrs) {
+      if (!a.required || e.find(a.key)) continue;
+      if (std::find(e.invalid_keys.begin(), e.invalid_keys.end(), a.key) != e.invalid_keys.end())
+        continue;
+      diags_.error("missing-attribute",
+                   describe_entity(e) + " is missing '" + std::string(a.key) + "' (" +
+                       std::string(describe(a.kind)) + ")",
+                   e.where);
+    }
+  }
+
+  // Registers a name; reports a duplicate of the same entity type.
+  void check_name(const EntityDesc& e) {
+    if (e.name.empty()) return;
+    auto& seen = names_[static_cast<int>(e.kind)];
+    auto [it, inserted] = seen.emplace(e.name, e.name_where);
+    if (!inserted)
+      diags_.error("duplicate-name",
+                   "duplicate " + std::string(entity_spec(e.kind).keyword) + " name '" + e.name +
+                       "' (first defined at " + position_text(it->second) + ")",
+                   e.name_where);
+  }
+
+  // Values of an attribute after the range check for its kind; empty when absent or bad.
+  std::vector<double> values(const EntityDesc& e, std::string_view key) {
+    const AttrDesc* a = e.find(key);
+    const AttrSpec* spec = find_attr(entity_spec(e.kind), key);
+    if (!a) {
+      if (!spec || spec->required) return {};
+      auto [lo, hi] = value_count(spec->kind);
+      (void)lo;
+      return {spec->fallback.begin(), spec->fallback.begin() + hi};
+    }
+    bool ok = true;
+    auto fail = [&](size_t i, const std::string& what) {
+      const Where& w = i < a->value_where.size() ? a->value_where[i] : a->where;
+      diags_.error("out-of-range",
+                   "'" + a->key + "' " + what + ", got " + format_number(a->numbers[i]), w);
+      ok = false;
+    };
+    for (size_t i = 0; i < a->numbers.size(); ++i) {
+      double v = a->numbers[i];
+      if (!std::isfinite(v)) {
+        fail(i, "must be a finite number");
+        continue;
+      }
+      switch (spec->kind) {
+        case ValueKind::pixel_dims:
+          if (v < 1 || v > 65535 || v != std::floor(v))
+            fail(i, "values must be integers from 1 to 65535");
+          break;
+        case ValueKind::window_dims:
+          if (!(v > 0)) fail(i, "values must be > 0");
+          break;
+        case ValueKind::colour:
+          if (v < 0) fail(i, "values must be >= 0");
+          break;
+        case ValueKind::positive:
+          if (!(v > 0)) fail(i, "must be > 0");
+          break;
+        default: break;
+      }
+    }
+    if (ok && spec->kind == ValueKind::direction && a->numbers.size() == 3 &&
+        a->numbers[0] == 0 && a->numbers[1] == 0 && a->numbers[2] == 0) {
+      diags_.error("out-of-range", "'" + a->key + "' must not be the zero vector", a->where);
+      ok = false;
+    }
+    if (!ok) return {};
+    std::vector<double> out = a->numbers;
+    if (spec->kind == ValueKind::colour && out.size() == 1) out.assign(3, out[0]);
+    return out;
+  }
+
+  static glm::dvec3 vec3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
+
+  void add_camera(const EntityDesc& e, Scene& scene) {
+    had_camera_ = true;
+    check_name(e);
+    auto pix = values(e, "pixeldim");
+    auto win = values(e, "worlddim");
+    auto eye = values(e, "viewpoint");
+    if (pix.size() != 2 || win.size() != 2 || eye.size() != 3) return;
+    scene.cameras.push_back({e.name, e.where, static_cast<int>(pix[0]), static_cast<int>(pix[1]), win[0],
+                             win[1], vec3(eye)});
+  }
+
+  void add_material(const EntityDesc& e, Scene& scene) {
+    check_name(e);
+    auto ka = values(e, "ambient"), kd = values(e, "diffuse"), ks = values(e, "specular");
+    auto n = values(e, "shininess");
+    if (ka.size() != 3 || kd.size() != 3 || ks.size() != 3 || n.size() != 1) return;
+    if (material_index_.count(e.name)) return;  // duplicate, reported
+    material_index_[e.name] = static_cast<int>(scene.materials.size());
+    scene.materials.push_back({e.name, e.where, vec3(ka), vec3(kd), vec3(ks), n[0]});
+  }
+
+  void add_light(const EntityDesc& e, Scene& scene) {
+    check_name(e);
+    auto loc = values(e, "location"), em = values(e, "emissivity");
+    if (loc.size() != 3 || em.size() != 3) return;
+    scene.lights.push_back({e.name, e.where, vec3(loc), vec3(em)});
+  }
+
+  std::optional<int> material_of(const EntityDesc& e) {
+    const AttrDesc* a = e.find("material");
+    if (!a) return std::nullopt;
+    auto it = material_index_.find(a->word);
+    if (it != material_index_.end()) return it->second;
+    if (material_names_defined(a->word)) return std::nullopt;  // defined but broken: reported
+    std::vector<std::string_view> names;
+    std::string list;
+    for (auto& [name, where] : names_[static_cast<int>(EntityKind::material)]) {
+      names.push_back(name);
+      if (names.size() <= 12) list += (list.empty() ? "" : ", ") + name;
+    }
+    if (names.size() > 12) list += ", ...";
+    std::string hint = nearest_word(a->word, names);
+    std::string msg = "undefined material '" + a->word + "' in " + describe_entity(e);
+    if (!hint.empty()) msg += " (did you mean '" + hint + "'?)";
+    msg += list.empty() ? "; no materials are defined" : "; defined: " + list;
+    diags_.error("undefined-material", msg,
+                 a->value_where.empty() ? a->where : a->value_where[0]);
+    return std::nullopt;
+  }
+
+  bool material_names_defined(const std::string& name) {
+    return names_[static_cast<int>(EntityKind::material)].count(name) > 0;
+  }
+
+  void add_sphere(const EntityDesc& e, Scene& scene) {
+    check_name(e);
+    auto c = values(e, "center"), r = values(e, "radius");
+    auto m = material_of(e);
+    if (c.size() != 3 || r.size() != 1 || !m) return;
+    scene.spheres.push_back({e.name, e.where, vec3(c), r[0], *m});
+  }
+
+  void add_plane(const EntityDesc& e, Scene& scene) {
+    check_name(e);
+    auto n = values(e, "normal"), p = values(e, "point");
+    auto m = material_of(e);
+    if (n.size() != 3 || p.size() != 3 || !m) return;
+    scene.planes.push_back({e.name, e.where, vec3(n), vec3(p), *m});
+  }
+
+  Diagnostics& diags_;
+  std::map<std::string, Where> names_[5];
+  std::map<std::string, int> material_index_;
+  bool had_camera_ = false;
+};
+
+}  // namespace
+
+std::optional<int> Scene::find_camera(std::string_view name) const {
+  if (cameras.empty()) return std::nullopt;
+  if (name.empty()) return 0;
+  for (size_t i = 0; i < cameras.size(); ++i)
+    if (cameras[i].name == name) return static_cast<int>(i);
+  return std::nullopt;
+}
+
+std::optional<Scene> build_scene(const SceneDesc& desc, Diagnostics& diags) {
+  return SceneBuilder(diags).build(desc);
+}
+
+}  // namespace rayfarm

@@ -1,0 +1,199 @@
+// The classic Whitted tracer of the lecture (SPEC §3): closest hit, ambient over travelled
+// distance, diffuse and Phong/Blinn highlight over light distance, shadows, clamped mirror
+// reflection. Iterative, so deep recursion cannot overflow the stack.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "prepared_scene.h"
+
+namespace rayfarm {
+
+struct RayCounts {
+  std::uint64_t primary = 0;
+  std::uint64_t shadow = 0;
+  std::uint64_t reflection = 0;
+};
+
+template <class T>
+inline T clamp01(T x) {  // NaN maps to 0: no NaN can ever reach a pixel
+  return x > 0 ? (x < 1 ? x : T(1)) : T(0);
+}
+
+template <class T>
+inline Vec3<T> clamp01(const Vec3<T>& c) {
+  return {clamp01(c.x), clamp01(c.y), clamp01(c.z)};
+}
+
+// The object a secondary ray leaves from. Leaving a convex object's outside, the ray cannot
+// hit it again; leaving a sphere's inside, it can only hit the far side. This replaces the
+// usual epsilon offset, which fails at some scene scale.
+struct Origin {
+  int object = -1;  // spheres first, then planes; -1 for the eye
+  bool inside = false;
+};
+
+template <class T>
+struct Hit {
+  T t = std::numeric_limits<T>::infinity();
+  int object = -1;
+};
+
+template <class T>
+class Tracer {
+ public:
+  explicit Tracer(const PreparedScene<T>& scene) : s_(scene) {}
+
+  RayCounts counts;
+
+  // Colour of the primary ray through the world point `target` on the screen.
+  Vec3<T> primary(const Vec3<T>& target) {
+    ++counts.primary;
+    Vec3<T> dir = target - s_.eye;
+    T len = glm::length(dir);
+    if (!(len > 0) || !std::isfinite(len)) return s_.background;
+    return trace(s_.eye, dir / len);
+  }
+
+  Hit<T> closest(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max) const {
+    Hit<T> best;
+    const int ns = static_cast<int>(s_.spheres.size());
+    for (int i = 0; i < ns; ++i) {
+      const PreparedSphere<T>& sp = s_.spheres[i];
+      if (i == from.object && !from.inside) continue;
+      auto roots = sphere_roots(o, d, sp.centre, sp.radius);
+      if (!roots) continue;
+      T t = i == from.object ? roots->far : (roots->near > 0 ? roots->near : roots->far);
+      if (t > 0 && t <= t_max && t < best.t) best = {t, i};
+    }
+    for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
+      if (ns + j == from.object) continue;
+      const PreparedPlane<T>& pl = s_.planes[j];
+      auto t = plane_distance(o, d, pl.normal, pl.point);
+      if (t && *t > 0 && *t <= t_max && *t < best.t) best = {*t, ns + j};
+    }
+    return best;
+  }
+
+  bool occluded(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist) const {
+    const int ns = static_cast<int>(s_.spheres.size());
+    for (int i = 0; i < ns; ++i) {
+      if (i == from.object && !from.inside) continue;
+      const PreparedSphere<T>& sp = s_.spheres[i];
+      auto roots = sphere_roots(o, d, sp.centre, sp.radius);
+      if (!roots) continue;
+      T t = i == from.object ? roots->far : (roots->near > 0 ? roots->near : roots->far);
+      if (t > 0 && t < dist) return true;
+    }
+    for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
+      if (ns + j == from.object) continue;
+      const PreparedPlane<T>& pl = s_.planes[j];
+      auto t = plane_distance(o, d, pl.normal, pl.point);
+      if (t && *t > 0 && *t < dist) return true;
+    }
+    return false;
+  }
+
+ private:
+  struct Level {
+    Vec3<T> local;
+    Vec3<T> weight;  // the material's specular: how much of the next level is added
+  };
+
+  Vec3<T> trace(Vec3<T> origin, Vec3<T> dir) {
+    levels_.clear();
+    Origin from;
+    T travelled = 0;
+    T path_weight = 1;
+    for (int depth = 0;; ++depth) {
+      Hit<T> hit = closest(origin, dir, from, s_.max_dist - travelled);
+      if (hit.object < 0) {
+        levels_.push_back({s_.background, Vec3<T>(0)});
+        break;
+      }
+      const T r_total = travelled + hit.t;
+      const Vec3<T> p = origin + hit.t * dir;
+      Vec3<T> n;
+      int material;
+      const int ns = static_cast<int>(s_.spheres.size());
+      if (hit.object < ns) {
+        const PreparedSphere<T>& sp = s_.spheres[hit.object];
+        n = p - sp.centre;
+        T nl = glm::length(n);
+        n = nl > 0 ? n / nl : -dir;
+        material = sp.material;
+      } else {
+        const PreparedPlane<T>& pl = s_.planes[hit.object - ns];
+        n = pl.normal;
+        material = pl.material;
+      }
+      // Two-sided: the normal faces the incoming ray; from inside a sphere it points inward.
+      const bool inside = glm::dot(n, dir) > 0;
+      if (inside) n = -n;
+      const PreparedMaterial<T>& m = s_.materials[material];
+
+      Vec3<T> colour = m.ambient / r_total;
+      if (s_.features.lights) add_direct_light(colour, p, n, dir, m, {hit.object, inside});
+      colour = clamp01(colour);
+
+      const bool reflect = s_.features.reflection && m.reflects && depth < s_.max_depth &&
+                           !(path_weight * m.max_specular < s_.bailout);
+      if (!reflect) {
+        levels_.push_back({colour, Vec3<T>(0)});
+        break;
+      }
+      levels_.push_back({colour, m.specular});
+      path_weight *= m.max_specular;
+      dir = dir - (2 * glm::dot(n, dir)) * n;
+      origin = p;
+      travelled = r_total;
+      from = {hit.object, inside};
+      ++counts.reflection;
+    }
+    Vec3<T> c = levels_.back().local;
+    for (size_t i = levels_.size() - 1; i-- > 0;)
+      c = clamp01(levels_[i].local + levels_[i].weight * c);
+    return c;
+  }
+
+  // Adds each light's term in scene order, as the formula reads.
+  void add_direct_light(Vec3<T>& colour, const Vec3<T>& p, const Vec3<T>& n, const Vec3<T>& dir,
+                        const PreparedMaterial<T>& m, Origin from) {
+    const Vec3<T> v = -dir;
+    for (const PreparedLight<T>& light : s_.lights) {
+      Vec3<T> l = light.location - p;
+      T r = glm::length(l);
+      // A light exactly at the shaded point has no direction: it contributes nothing.
+      if (!(r > 0) || !std::isfinite(r)) continue;
+      l /= r;
+      T n_dot_l = glm::dot(n, l);
+      if (!(n_dot_l > 0)) continue;
+      if (s_.features.shadows) {
+        ++counts.shadow;
+        if (occluded(p, l, from, r)) continue;
+      }
+      Vec3<T> term = m.diffuse * n_dot_l;
+      if (s_.features.highlight && m.highlights) {
+        T base;
+        if (s_.blinn) {
+          Vec3<T> h = l + v;
+          T hl = glm::length(h);
+          base = hl > 0 ? glm::dot(n, h / hl) : T(0);
+        } else {
+          Vec3<T> rl = (2 * n_dot_l) * n - l;
+          base = glm::dot(rl, v);
+        }
+        term += m.specular * std::pow(base > 0 ? base : T(0), m.shininess);
+      }
+      colour += (light.emissivity / r) * term;
+    }
+  }
+
+  const PreparedScene<T>& s_;
+  std::vector<Level> levels_;
+};
+
+}  // namespace rayfarm

@@ -1,0 +1,280 @@
+// Tests for PNG/PPM encoding and decoding, including hostile and malformed input.
+#include "rayfarm/image_io.h"
+
+#include <gtest/gtest.h>
+#include <libdeflate.h>
+
+#include <cstdint>
+#include <random>
+#include <stdexcept>
+#include <thread>
+
+namespace rayfarm {
+namespace {
+
+Image random_image(int width, int height, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> byte(0, 255);
+  Image image(width, height);
+  for (auto& v : image.rgb) v = static_cast<std::uint8_t>(byte(rng));
+  return image;
+}
+
+std::string_view view(const std::vector<unsigned char>& bytes) {
+  return {reinterpret_cast<const char*>(bytes.data()), bytes.size()};
+}
+
+void put_be32(std::string& out, std::uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) out += static_cast<char>(v >> shift & 0xff);
+}
+
+std::string zlib(std::string_view data) {
+  libdeflate_compressor* c = libdeflate_alloc_compressor(6);
+  std::string out(libdeflate_zlib_compress_bound(c, data.size()), '\0');
+  out.resize(libdeflate_zlib_compress(c, data.data(), data.size(), out.data(), out.size()));
+  libdeflate_free_compressor(c);
+  return out;
+}
+
+void put_chunk(std::string& png, std::string_view type, std::string_view data,
+               std::uint32_t length) {
+  put_be32(png, length);
+  std::string body = std::string(type) + std::string(data);
+  png += body;
+  put_be32(png, libdeflate_crc32(0, body.data(), body.size()));
+}
+
+// A PNG built by hand, so that colour types stb_image_write never produces can be tested.
+// `rows` are the raw scanlines, each with its leading filter byte.
+std::string make_png(std::uint32_t width, std::uint32_t height, int bit_depth, int colour_type,
+                     std::string_view rows) {
+  std::string png("\x89PNG\r\n\x1a\n", 8);
+  std::string ihdr;
+  put_be32(ihdr, width);
+  put_be32(ihdr, height);
+  ihdr += {static_cast<char>(bit_depth), static_cast<char>(colour_type), 0, 0, 0};
+  put_chunk(png, "IHDR", ihdr, 13);
+  std::string idat = zlib(rows);
+  put_chunk(png, "IDAT", idat, static_cast<std::uint32_t>(idat.size()));
+  put_chunk(png, "IEND", "", 0);
+  return png;
+}
+
+std::string decode_error(std::string_view bytes) {
+  std::string error;
+  auto image = decode_image(bytes, &error);
+  EXPECT_FALSE(image) << "decoded unexpectedly: " << bytes.substr(0, 40);
+  EXPECT_FALSE(error.empty());
+  return error;
+}
+
+Image decode_ok(std::string_view bytes) {
+  std::string error;
+  auto image = decode_image(bytes, &error);
+  EXPECT_TRUE(image) << error;
+  return image.value_or(Image());
+}
+
+const std::pair<int, int> kSizes[] = {{1, 1}, {7, 3}, {1, 37}, {37, 1}, {64, 64}, {33, 17}};
+
+TEST(ImageIo, PngRoundTripKeepsEveryPixel) {
+  unsigned seed = 1;
+  for (auto [w, h] : kSizes) {
+    Image image = random_image(w, h, seed++);
+    EXPECT_EQ(decode_ok(view(encode_png(image))), image) << w << "x" << h;
+  }
+}
+
+TEST(ImageIo, PpmRoundTripKeepsEveryPixel) {
+  unsigned seed = 100;
+  for (auto [w, h] : kSizes) {
+    Image image = random_image(w, h, seed++);
+    EXPECT_EQ(decode_ok(view(encode_ppm(image))), image) << w << "x" << h;
+  }
+}
+
+TEST(ImageIo, PpmEncodingIsBinaryP6) {
+  Image image(2, 1);
+  image.rgb = {1, 2, 3, 4, 5, 6};
+  auto ppm = encode_ppm(image);
+  EXPECT_EQ(view(ppm), std::string_view("P6\n2 1\n255\n\x01\x02\x03\x04\x05\x06"));
+}
+
+TEST(ImageIo, EncodeImageFollowsTheFormat) {
+  Image image = random_image(3, 2, 7);
+  EXPECT_EQ(encode_image(image, ImageFormat::ppm), encode_ppm(image));
+  EXPECT_EQ(encode_image(image, ImageFormat::png), encode_png(image));
+}
+
+TEST(ImageIo, PngRowsUseTheUpFilter) {
+  Image image = random_image(5, 4, 3);
+  auto png = encode_png(image);
+  std::string_view bytes = view(png);
+  ASSERT_TRUE(bytes.starts_with(std::string_view("\x89PNG\r\n\x1a\n", 8)));
+  std::size_t idat = bytes.find("IDAT");
+  ASSERT_NE(idat, std::string_view::npos);
+  std::uint32_t length = 0;
+  for (std::size_t i = idat - 4; i < idat; ++i) length = length << 8 | png[i];
+  std::string raw(4 * (5 * 3 + 1), '\0');
+  libdeflate_decompressor* d = libdeflate_alloc_decompressor();
+  auto result =
+      libdeflate_zlib_decompress(d, png.data() + idat + 4, length, raw.data(), raw.size(), nullptr);
+  libdeflate_free_decompressor(d);
+  ASSERT_EQ(result, LIBDEFLATE_SUCCESS);
+  for (int row = 0; row < 4; ++row) EXPECT_EQ(raw[row * 16], 2) << "row " << row;
+}
+
+TEST(ImageIo, ConcurrentPngEncodesAgree) {
+  Image image = random_image(40, 30, 11);
+  auto expected = encode_png(image);
+  std::vector<std::vector<unsigned char>> results(8);
+  std::vector<std::thread> threads;
+  for (auto& result : results) {
+    threads.emplace_back([&image, out = &result] { *out = encode_png(image); });
+  }
+  for (auto& t : threads) t.join();
+  for (const auto& result : results) EXPECT_EQ(result, expected);
+}
+
+TEST(ImageIo, EncodersRefuseMalformedImages) {
+  Image bad(2, 2);
+  bad.rgb.pop_back();
+  EXPECT_THROW(encode_png(bad), std::invalid_argument);
+  EXPECT_THROW(encode_ppm(bad), std::invalid_argument);
+  EXPECT_THROW(encode_png(Image()), std::invalid_argument);
+  EXPECT_EQ(view(encode_ppm(Image())), "P6\n0 0\n255\n");
+}
+
+TEST(ImageIo, AsciiP3WithCommentsDecodes) {
+  Image image = decode_ok("P3\n# made by hand\n2 # width\n1\n255\n255 0 0\t0 255 7\n");
+  EXPECT_EQ(image.width, 2);
+  EXPECT_EQ(image.height, 1);
+  EXPECT_EQ(image.rgb, (std::vector<std::uint8_t>{255, 0, 0, 0, 255, 7}));
+}
+
+TEST(ImageIo, SmallMaxvalIsScaledTo255) {
+  EXPECT_EQ(decode_ok("P3 1 1 15 15 0 7").rgb, (std::vector<std::uint8_t>{255, 0, 119}));
+  EXPECT_EQ(decode_ok(std::string("P6 1 1 100\n\x64\x00\x32", 14)).rgb,
+            (std::vector<std::uint8_t>{255, 0, 128}));
+}
+
+TEST(ImageIo, SixteenBitP6IsBigEndianAndScaledTo8Bits) {
+  std::string ppm = "P6\n# 16 bit\n2 1\n65535\n";
+  ppm += std::string("\xff\xff\x00\x00\x80\x80\x3c\x3c\x01\x01\x00\xff", 12);
+  EXPECT_EQ(decode_ok(ppm).rgb, (std::vector<std::uint8_t>{255, 0, 128, 60, 1, 1}));
+  EXPECT_EQ(decode_ok("P3 1 1 1000 1000 0 500").rgb, (std::vector<std::uint8_t>{255, 0, 128}));
+}
+
+TEST(ImageIo, TruncatedPpmDataReportsWhatWasMissing) {
+  EXPECT_EQ(decode_error("P6\n2 2\n255\nabcde"), "truncated PPM data: expected 12 bytes, got 5");
+  EXPECT_EQ(decode_error("P6\n2 2\n65535\nabcde"), "truncated PPM data: expected 24 bytes, got 5");
+  EXPECT_EQ(decode_error("P3\n2 1\n255\n1 2 3 4"), "truncated PPM data: expected 6 samples, got 4");
+  EXPECT_EQ(decode_error("P6\n2 2\n255"), "bad PPM header: no whitespace after maxval");
+}
+
+TEST(ImageIo, MalformedPpmHeadersAreErrors) {
+  EXPECT_EQ(decode_error("P6"), "truncated PPM header: no width");
+  EXPECT_EQ(decode_error("P6\n4 4\n"), "truncated PPM header: no maxval");
+  EXPECT_EQ(decode_error("P6\nabc 2 255\n"), "bad PPM header: width is not a number");
+  EXPECT_EQ(decode_error("P6\n2 -2 255\n"), "bad PPM header: height is not a number");
+  EXPECT_EQ(decode_error("P6\n2 2x 255\n"), "bad PPM header: height is not a number");
+  EXPECT_EQ(decode_error("P612 2 255\n"), "bad PPM header: no whitespace after P6");
+  EXPECT_EQ(decode_error("P6 1 1 0\n"), "bad PPM header: maxval 0 is not in 1..65535");
+  EXPECT_EQ(decode_error("P6 1 1 65536\n"), "bad PPM header: maxval 65536 is not in 1..65535");
+  EXPECT_EQ(decode_error("P3 1 1 255 1 2 x"), "bad PPM data: sample 3 is not a number");
+  EXPECT_EQ(decode_error("P3 1 1 200 1 2 201"), "PPM sample 201 exceeds maxval 200");
+  EXPECT_EQ(decode_error("P6 1 1 9\n\x01\x02\x0a"), "PPM sample 10 exceeds maxval 9");
+  EXPECT_EQ(decode_error("P5 1 1 255\n\x01"),
+            "unsupported Netpbm type P5: only PPM (P3, P6) is read");
+}
+
+TEST(ImageIo, ZeroAndOversizedDimensionsAreRefusedBeforeAllocating) {
+  EXPECT_EQ(decode_error("P6 0 5 255\n"), "image has no pixels (0x5)");
+  EXPECT_EQ(decode_error("P3 5 0 255\n"), "image has no pixels (5x0)");
+  EXPECT_EQ(decode_error("P6 100000 100000 255\n"),
+            "image too large: 100000x100000 is over the limit of 67108864 pixels");
+  EXPECT_EQ(decode_error("P6 99999999999999999999999 99999999999999999999999 255\n"),
+            "image too large: 4294967295x4294967295 is over the limit of 67108864 pixels");
+  EXPECT_EQ(decode_error(make_png(65535, 65535, 8, 2, "")),
+            "image too large: 65535x65535 is over the limit of 67108864 pixels");
+  EXPECT_EQ(decode_error(make_png(0, 1, 8, 2, "")), "image has no pixels (0x1)");
+}
+
+TEST(ImageIo, GarbageIsNotAnImage) {
+  EXPECT_EQ(decode_error(""), "not a PNG or PPM image");
+  EXPECT_EQ(decode_error("P"), "not a PNG or PPM image");
+  EXPECT_EQ(decode_error("hello world"), "not a PNG or PPM image");
+  EXPECT_EQ(decode_error(std::string_view("\x89PNG\r\n\x1a", 7)), "not a PNG or PPM image");
+  EXPECT_EQ(decode_error(std::string_view("\x89PNG\r\n\x1b\n rest", 13)), "not a PNG or PPM image");
+  EXPECT_EQ(decode_error(std::string_view("\x89PNG\r\n\x1a\n", 8)),
+            "corrupt PNG: no IHDR chunk after the signature");
+}
+
+TEST(ImageIo, TruncatedPngNeverCrashes) {
+  Image image = random_image(9, 7, 5);
+  auto png = encode_png(image);
+  for (std::size_t n = 0; n < png.size(); ++n) {
+    std::string error;
+    auto decoded = decode_image(view(png).substr(0, n), &error);
+    // Only the trailing IEND CRC may go missing unnoticed.
+    if (decoded) {
+      EXPECT_EQ(*decoded, image);
+    } else {
+      EXPECT_FALSE(error.empty());
+    }
+  }
+}
+
+TEST(ImageIo, RandomBytesAfterValidSignaturesNeverCrash) {
+  std::mt19937 rng(42);
+  std::uniform_int_distribution<int> byte(0, 255);
+  const std::string prefixes[] = {std::string("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR", 16), "P6 ", "P3 ",
+                                  "P6 3 2 ", "P6 2 2 65535\n"};
+  for (int i = 0; i < 2000; ++i) {
+    std::string bytes = prefixes[i % 5];
+    int extra = byte(rng);
+    for (int k = 0; k < extra; ++k) bytes += static_cast<char>(byte(rng) % (i % 2 ? 256 : 64));
+    std::string error;
+    decode_image(bytes, &error);
+  }
+}
+
+TEST(ImageIo, PngWithAlphaGreyOrSixteenBitsDecodesToRgb) {
+  std::string rgba("\0\x0a\x14\x1e\xff\x28\x32\x3c\x00", 9);
+  EXPECT_EQ(decode_ok(make_png(2, 1, 8, 6, rgba)).rgb,
+            (std::vector<std::uint8_t>{10, 20, 30, 40, 50, 60}));
+  std::string grey("\0\x07\xf0", 3);
+  EXPECT_EQ(decode_ok(make_png(2, 1, 8, 0, grey)).rgb,
+            (std::vector<std::uint8_t>{7, 7, 7, 240, 240, 240}));
+  std::string rgb16("\0\xff\xff\x00\x00\x80\x80", 7);
+  EXPECT_EQ(decode_ok(make_png(1, 1, 16, 2, rgb16)).rgb, (std::vector<std::uint8_t>{255, 0, 128}));
+}
+
+// Found by fuzzing: stb_image copied from a null pointer (UBSan) for a leading empty IDAT.
+TEST(ImageIo, EmptyIdatChunksAreSkipped) {
+  std::string rows("\0\x01\x02\x03", 4);
+  std::string png = make_png(1, 1, 8, 2, rows);
+  std::string with_empty = png.substr(0, 33);  // signature and IHDR
+  put_chunk(with_empty, "IDAT", "", 0);
+  with_empty += png.substr(33, png.size() - 33 - 12);
+  put_chunk(with_empty, "IDAT", "", 0);
+  put_chunk(with_empty, "IEND", "", 0);
+  EXPECT_EQ(decode_ok(with_empty).rgb, (std::vector<std::uint8_t>{1, 2, 3}));
+}
+
+TEST(ImageIo, PngDataInflatingFarBeyondItsHeaderIsRefused) {
+  std::string rows(16 << 20, '\0');  // 16 MiB of scanlines for a 1x1 image
+  EXPECT_EQ(decode_error(make_png(1, 1, 8, 2, rows)),
+            "cannot decode PNG: data larger than its size");
+}
+
+TEST(ImageIo, PngChunkClaimingGigabytesIsRefused) {
+  std::string png = make_png(1, 1, 8, 2, std::string(4, '\0'));
+  std::string hostile = png.substr(0, 33);  // signature and IHDR
+  put_chunk(hostile, "IDAT", "short", 0x7ffffff0);
+  EXPECT_EQ(decode_error(hostile),
+            "cannot decode PNG: data larger than its size");  // not even tried
+}
+
+}  // namespace
+}  // namespace rayfarm
