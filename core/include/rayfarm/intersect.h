@@ -48,7 +48,7 @@ std::optional<Roots<T>> sphere_roots_naive(const Vec3<T>& o, const Vec3<T>& d,
   T b = 2 * glm::dot(pc, d);
   T c = glm::dot(pc, pc) - radius * radius;
   T disc = b * b - 4 * a * c;
-  if (!(disc >= 0)) return std::nullopt;
+  if (!(disc > 0)) return std::nullopt;  // the lecture's test: B^2 - 4AC > 0
   T s = std::sqrt(disc);
   return Roots<T>{(-b - s) / (2 * a), (-b + s) / (2 * a)};
 }

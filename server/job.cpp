@@ -1,0 +1,93 @@
+// Job states and the status document.
+#include "job.h"
+
+#include <chrono>
+#include <cmath>
+
+namespace rayfarm::server {
+
+std::string_view to_string(JobState s) {
+  switch (s) {
+    case JobState::queued: return "queued";
+    case JobState::running: return "running";
+    case JobState::done: return "done";
+    case JobState::failed: return "failed";
+    case JobState::canceled: return "canceled";
+  }
+  return "queued";
+}
+
+std::optional<JobState> job_state_from(std::string_view s) {
+  for (JobState st : {JobState::queued, JobState::running, JobState::done, JobState::failed,
+                      JobState::canceled})
+    if (to_string(st) == s) return st;
+  return std::nullopt;
+}
+
+long long now_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+namespace {
+
+nlohmann::json iso_or_null(long long ms) {
+  if (ms <= 0) return nullptr;
+  std::time_t secs = static_cast<std::time_t>(ms / 1000);
+  std::tm tm{};
+  gmtime_r(&secs, &tm);
+  char buf[40];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%S", &tm);
+  char out[48];
+  std::snprintf(out, sizeof out, "%s.%03lldZ", buf, ms % 1000);
+  return std::string(out);
+}
+
+}  // namespace
+
+nlohmann::json job_status(const Job& job, int queue_position) {
+  std::lock_guard lock(job.mu);
+  const RenderStats& st = job.stats;
+  nlohmann::json j;
+  j["id"] = job.id;
+  j["state"] = to_string(job.state);
+  j["progress"] = job.state == JobState::done ? 1.0 : st.progress();
+  j["queue_position"] = queue_position;
+  j["created_at"] = iso_or_null(job.created_ms);
+  j["started_at"] = iso_or_null(job.started_ms);
+  j["finished_at"] = iso_or_null(job.finished_ms);
+  long long end = job.finished_ms > 0 ? job.finished_ms : now_ms();
+  j["elapsed_ms"] = job.started_ms > 0 ? end - job.started_ms : 0;
+  double progress = st.progress();
+  if (job.state == JobState::running && progress > 0.01 && st.render_ms > 0)
+    j["eta_ms"] = std::llround(st.render_ms * (1 - progress) / progress);
+  else
+    j["eta_ms"] = is_final(job.state) ? nlohmann::json(0) : nlohmann::json(nullptr);
+  j["spp_done"] = st.spp_done;
+  j["error_estimate"] = st.error_estimate >= 0 ? nlohmann::json(st.error_estimate)
+                                               : nlohmann::json(nullptr);
+  double secs = st.render_ms / 1000;
+  j["stats"] = {{"rays", {{"primary", st.primary_rays},
+                          {"shadow", st.shadow_rays},
+                          {"reflection", st.reflection_rays}}},
+                {"rays_per_second", secs > 0 ? st.total_rays() / secs : 0.0},
+                {"render_ms", st.render_ms},
+                {"prepare_ms", st.prepare_ms},
+                {"parts", st.parts},
+                {"stop_reason", st.stop_reason},
+                {"cache", job.cache_hit ? "hit" : "miss"}};
+  nlohmann::json opts = nlohmann::json::object();
+  for (auto& [k, v] : option_pairs(job.options)) opts[k] = v;
+  opts["width"] = job.width;
+  opts["height"] = job.height;
+  j["options"] = opts;
+  j["error"] = job.error.empty() ? nlohmann::json(nullptr)
+                                 : nlohmann::json{{"code", job.error_code}, {"message", job.error}};
+  j["links"] = {{"self", "/jobs/" + job.id},
+                {"image", "/jobs/" + job.id + "/image"},
+                {"events", "/jobs/" + job.id + "/events"}};
+  return j;
+}
+
+}  // namespace rayfarm::server

@@ -1,0 +1,78 @@
+// rayfarmd: the render service. SIGTERM/SIGINT stop intake, let running renders finish for
+// the grace period, persist the rest, and exit cleanly.
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <pthread.h>
+#include <thread>
+#include <unistd.h>
+
+#include "http_api.h"
+#include "service.h"
+#include "settings.h"
+
+namespace {
+
+std::string default_samples_dir(const char* argv0) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path exe = fs::canonical("/proc/self/exe", ec);
+  if (ec) exe = argv0;
+  for (fs::path p : {exe.parent_path().parent_path() / "share/rayfarm/scenes",
+                     fs::path(RAYFARM_SOURCE_SCENES)})
+    if (fs::is_directory(p, ec)) return p.string();
+  return {};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace rayfarm::server;
+  // Signals are taken by one thread with sigwait; every other thread has them blocked.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  int exit_code = 0;
+  auto settings = parse_settings(argc, argv, exit_code);
+  if (!settings) return exit_code;
+  if (settings->samples_dir.empty()) settings->samples_dir = default_samples_dir(argv[0]);
+
+  std::unique_ptr<Service> service;
+  try {
+    service = std::make_unique<Service>(*settings);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rayfarmd: %s\n", e.what());
+    return 1;
+  }
+  HttpApi api(*service);
+  int port = api.bind(settings->host, settings->port);
+  if (port < 0) {
+    std::fprintf(stderr, "rayfarmd: cannot listen on %s:%d\n", settings->host.c_str(),
+                 settings->port);
+    return 1;
+  }
+  std::fprintf(stderr, "rayfarmd: listening on http://%s:%d (%d render workers, results %s)\n",
+               settings->host.c_str(), port, service->health()["workers"].get<int>(),
+               settings->results_dir.empty() ? "in memory" : settings->results_dir.c_str());
+
+  std::thread signal_thread([&] {
+    int sig = 0;
+    sigwait(&signals, &sig);
+    std::fprintf(stderr, "rayfarmd: %s: finishing running renders, then stopping\n",
+                 sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    service->shutdown();
+    api.stop();
+  });
+  bool ok = api.listen();
+  if (!ok && !service->shutting_down()) {
+    // listen failed on its own: wake the signal thread so it can end.
+    kill(getpid(), SIGTERM);
+  }
+  signal_thread.join();
+  std::fprintf(stderr, "rayfarmd: stopped\n");
+  return 0;
+}

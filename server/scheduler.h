@@ -1,0 +1,83 @@
+// The render pool: worker threads that take tiles from jobs, round-robin over clients and,
+// within a client, over its active jobs. A job alone gets every worker; a small job behind
+// a big one gets its share at once. Renders never run on HTTP threads.
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "job.h"
+
+namespace rayfarm::server {
+
+class Scheduler {
+ public:
+  struct Hooks {
+    std::function<void(Job&)> started;  // state is running, attempts counted
+    std::function<void(Job&)> progress;
+    // Exactly once per job: the render ended (`render` null when canceled while queued).
+    std::function<void(Job&, RenderJob* render)> finished;
+  };
+
+  Scheduler(int workers, int max_active_per_client, double job_timeout_s, Hooks hooks);
+  ~Scheduler();
+
+  void submit(std::shared_ptr<Job> job);
+  // Cancels a queued job at once or asks a running one to stop. False if not in the pool.
+  bool cancel(const std::shared_ptr<Job>& job);
+  // 1-based place among jobs not yet started, 0 when started or unknown.
+  int queue_position(const Job& job) const;
+  size_t waiting() const;
+  size_t active() const;
+  int workers() const { return static_cast<int>(threads_.size()); }
+
+  // Shutdown: no queued job starts any more; returns when running renders ended or the
+  // grace period passed (then they are canceled).
+  void drain(std::chrono::milliseconds grace);
+  void stop();
+
+ private:
+  struct Entry {
+    std::shared_ptr<Job> job;
+    bool active = false;     // started (render exists or is being prepared)
+    bool preparing = false;
+    std::uint64_t blocked_epoch = ~0ULL;  // its pass waits for tiles in flight
+  };
+  struct Client {
+    std::string name;
+    std::deque<Entry> entries;
+    size_t next = 0;
+  };
+  struct Pick {
+    std::shared_ptr<Job> job;
+    bool prepare = false;
+    std::uint64_t epoch = 0;
+  };
+
+  void work();
+  std::optional<Pick> pick();
+  void prepare(const std::shared_ptr<Job>& job);
+  void remove_and_finish(const std::shared_ptr<Job>& job, RenderJob* render);
+  Entry* find(const Job& job);
+  void after_tile(const std::shared_ptr<Job>& job);
+
+  const int max_active_per_client_;
+  const double job_timeout_s_;
+  Hooks hooks_;
+
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  std::vector<Client> clients_;
+  size_t next_client_ = 0;
+  std::uint64_t tile_epoch_ = 0;
+  bool paused_ = false;
+  bool stopping_ = false;
+  std::vector<std::thread> threads_;
+};
+
+}  // namespace rayfarm::server

@@ -1,0 +1,68 @@
+// Settings from flags and environment variables.
+#include "settings.h"
+
+#include <CLI/CLI.hpp>
+#include <thread>
+
+namespace rayfarm::server {
+
+std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
+  Settings s;
+  CLI::App app{"rayfarmd: the rayfarm render service"};
+  std::string tokens;
+  auto add = [&](const std::string& flag, auto& value, const std::string& help) {
+    std::string env = "RAYFARM_";
+    for (char c : flag.substr(2)) env += c == '-' ? '_' : static_cast<char>(std::toupper(c));
+    return app.add_option(flag, value, help)->envname(env)->capture_default_str();
+  };
+  add("--host", s.host, "address to listen on");
+  add("--port", s.port, "port to listen on (0: any free port)")->check(CLI::Range(0, 65535));
+  add("--workers", s.workers, "render threads (0: all cores)")->check(CLI::Range(0, 1024));
+  add("--queue-capacity", s.queue_capacity, "jobs queued or running before 429")
+      ->check(CLI::Range(1, 1000000));
+  add("--max-body-bytes", s.max_body_bytes, "largest request body");
+  add("--max-pixels", s.max_pixels, "largest image (width x height)")
+      ->check(CLI::Range(1LL, 256LL * 1024 * 1024));
+  add("--max-spp", s.max_spp, "largest spp")->check(CLI::Range(1, 1 << 20));
+  add("--max-depth", s.max_depth, "largest max_depth")->check(CLI::Range(0, 100000));
+  add("--max-objects", s.max_objects, "most spheres and planes in a scene")->check(CLI::Range(0, 100000000));
+  add("--max-lights", s.max_lights, "most lights in a scene")->check(CLI::Range(0, 1000000));
+  add("--job-timeout", s.job_timeout, "seconds a job may render (0: no limit)")
+      ->check(CLI::Range(0.0, 1e9));
+  add("--results-dir", s.results_dir, "directory for results and queued jobs (survive restarts)");
+  add("--cache-bytes", s.cache_bytes, "result bytes kept in memory");
+  add("--token", tokens, "bearer token(s) required of clients, comma-separated");
+  add("--http-threads", s.http_threads, "connection threads")->check(CLI::Range(4, 4096));
+  add("--max-event-streams", s.max_event_streams, "open event streams at once")
+      ->check(CLI::Range(0, 100000));
+  add("--max-waiting-requests", s.max_waiting_requests, "requests blocked in wait=1 at once")
+      ->check(CLI::Range(0, 100000));
+  add("--max-jobs-per-client", s.max_jobs_per_client, "jobs one client may have queued or running")
+      ->check(CLI::Range(1, 1000000));
+  add("--result-ttl", s.result_ttl, "seconds a finished job is kept")->check(CLI::Range(1.0, 1e9));
+  add("--results-max-bytes", s.results_max_bytes, "bytes of images kept in --results-dir");
+  add("--samples-dir", s.samples_dir, "directory of bundled sample scenes");
+  add("--shutdown-grace", s.shutdown_grace, "seconds running renders may finish on SIGTERM")
+      ->check(CLI::Range(0.0, 3600.0));
+  bool quiet = false;
+  app.add_flag("--no-access-log", quiet, "do not log each request")->envname("RAYFARM_NO_ACCESS_LOG");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    exit_code = app.exit(e);
+    if (exit_code != 0) exit_code = 2;
+    return std::nullopt;
+  }
+  s.access_log = !quiet;
+  size_t start = 0;
+  while (start < tokens.size()) {
+    size_t comma = tokens.find(',', start);
+    std::string t = tokens.substr(start, comma == std::string::npos ? comma : comma - start);
+    if (!t.empty()) s.tokens.push_back(t);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return s;
+}
+
+}  // namespace rayfarm::server

@@ -1,0 +1,43 @@
+// rayfarmd's settings: each a flag and an environment variable (SPEC §5).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rayfarm::server {
+
+struct Settings {
+  std::string host = "127.0.0.1";
+  int port = 8080;
+  int workers = 0;  // 0: all cores
+  int queue_capacity = 256;
+  std::uint64_t max_body_bytes = 16ULL << 20;
+  std::int64_t max_pixels = 4096LL * 4096;
+  int max_spp = 1024;
+  int max_depth = 64;
+  int max_objects = 1000000;
+  int max_lights = 1000;
+  double job_timeout = 600;  // seconds; 0: none
+  std::string results_dir;   // empty: keep results in memory only
+  std::uint64_t cache_bytes = 256ULL << 20;
+  std::vector<std::string> tokens;  // accepted bearer tokens; empty: no authentication
+
+  // Beyond the spec's list, for a shared lab.
+  int http_threads = 64;
+  int max_event_streams = 16;
+  int max_waiting_requests = 32;
+  int max_jobs_per_client = 32;  // queued or running at once
+  double result_ttl = 24 * 3600;  // seconds a finished job is kept
+  std::uint64_t results_max_bytes = 2ULL << 30;
+  std::string samples_dir;
+  double shutdown_grace = 10;  // seconds running renders may finish after SIGTERM
+  bool access_log = true;
+};
+
+// Parses flags (each also read from RAYFARM_<NAME>). Returns nullopt after printing help or
+// an error; `exit_code` tells which.
+std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code);
+
+}  // namespace rayfarm::server

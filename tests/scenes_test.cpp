@@ -1,0 +1,74 @@
+// Every bundled scene parses, passes its own check and renders; turning the scene-specific
+// pipeline off never changes a byte.
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "rayfarm/lint.h"
+#include "test_util.h"
+
+namespace rayfarm {
+namespace {
+
+std::vector<std::filesystem::path> scene_files() {
+  std::vector<std::filesystem::path> out;
+  for (auto& entry : std::filesystem::recursive_directory_iterator(RAYFARM_SOURCE_DIR "/scenes")) {
+    auto ext = entry.path().extension();
+    if (ext == ".txt" || ext == ".json") out.push_back(entry.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string read(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST(Scenes, ThereAreAtLeastEightModelFiles) {
+  int model_files = 0;
+  for (auto& p : scene_files()) model_files += p.extension() == ".txt";
+  EXPECT_GE(model_files, 8);
+}
+
+TEST(Scenes, EverySceneLoadsAndRendersTheSameWithAndWithoutSpecialization) {
+  for (const auto& path : scene_files()) {
+    SCOPED_TRACE(path.string());
+    std::string text = read(path);
+    LoadedScene loaded = load_scene(text);
+    ASSERT_TRUE(loaded.scene) << format_diagnostics(loaded.diags, path.string(), text);
+    RenderOptions o;
+    Diagnostics diags;
+    apply_options(o, loaded.scene->render, diags);
+    ASSERT_FALSE(diags.has_errors());
+    // A reduced size keeps the suite quick; the window is the same.
+    o.width = 96;
+    o.height = 72;
+    Image fast = test::render(*loaded.scene, o, 2);
+    ASSERT_EQ(fast.width, 96);
+    o.specialize = false;
+    EXPECT_EQ(test::render(*loaded.scene, o, 2), fast);
+    bool any_lit = false;
+    for (auto b : fast.rgb) any_lit = any_lit || b > 0;
+    EXPECT_TRUE(any_lit) << "an all-black image";
+  }
+}
+
+TEST(Scenes, BundledScenesHaveNoLintWarnings) {
+  for (const auto& path : scene_files()) {
+    if (path.string().find("/extreme/") != std::string::npos) continue;  // stiff on purpose
+    std::string text = read(path);
+    LoadedScene loaded = load_scene(text);
+    ASSERT_TRUE(loaded.scene);
+    RenderOptions o;
+    Diagnostics diags;
+    lint_scene(*loaded.scene, o, diags);
+    EXPECT_TRUE(diags.items().empty())
+        << path << ":\n" << format_diagnostics(diags, path.string(), text);
+  }
+}
+
+}  // namespace
+}  // namespace rayfarm
