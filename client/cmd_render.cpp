@@ -9,6 +9,7 @@
 #include "cli_common.h"
 #include "commands.h"
 #include "progress_bar.h"
+#include "remote.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/render.h"
 
@@ -20,6 +21,8 @@ struct RenderArgs {
   std::string out;
   int threads = 0;
   bool quiet = false;
+  std::string server;
+  std::string token;
   OptionFlags flags;
 };
 
@@ -71,16 +74,26 @@ Runner add_render(CLI::App& app) {
   app.add_option("--threads", args->threads, "render threads (default: all cores)")
       ->check(CLI::Range(0, 1024));
   app.add_flag("-q,--quiet", args->quiet, "no summary line");
+  app.add_option("--server", args->server,
+                 "render on this rayfarmd (default: $RAYFARM_SERVER; none: render here)");
+  app.add_option("--token", args->token, "bearer token for the server (default: $RAYFARM_TOKEN)");
   args->flags.add_to(app);
   return [args]() -> int {
     const auto t0 = std::chrono::steady_clock::now();
     auto text = read_input(args->scene);
     if (!text) return kInputError;
+    std::string out_path = args->out.empty() ? default_output(args->scene) : args->out;
+    if (std::string url = server_url(args->server); !url.empty()) {
+      ImageFormat format = format_for(out_path, args->flags);
+      return remote_render(args->scene, *text, out_path, args->flags.as_set(),
+                           std::string(to_string(format)), Remote{url, server_token(args->token)},
+                           args->quiet);
+    }
     auto loaded = load_checked(args->scene, *text, false);
     if (!loaded) return kInputError;
     auto options = resolve_options(*loaded->scene, args->flags);
     if (!options) return kInputError;
-    std::string out = args->out.empty() ? default_output(args->scene) : args->out;
+    const std::string& out = out_path;
     options->format = format_for(out, args->flags);
 
     ProgressBar bar(isatty(STDERR_FILENO) && !args->quiet);

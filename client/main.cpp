@@ -1,5 +1,5 @@
-// rayfarm: the command line. Renders locally (no server needed) and checks and converts
-// scenes (SPEC §6).
+// rayfarm: the command line (SPEC §6). Renders locally with no server, or as rayfarmd's
+// client; checks, converts and compares.
 #include <iostream>
 #include <map>
 
@@ -19,6 +19,10 @@ int main(int argc, char** argv) {
   add("render", "render a scene to PNG or PPM", add_render);
   add("check", "validate and lint scenes; exit 1 on errors", add_check);
   add("convert", "convert a scene to JSON, model file or POV-Ray SDL", add_convert);
+  add("compare", "compare two images (RMSE, PSNR, differing pixels)", add_compare);
+  add("status", "show a job's status on a server", add_status);
+  add("cancel", "cancel a job on a server", add_cancel);
+  add("wait", "wait for a job on a server and fetch its image", add_wait);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,88 @@
+// `rayfarm compare A B`: the grader's metrics, locally (the same as POST /compare).
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "rayfarm/compare.h"
+#include "rayfarm/image_io.h"
+
+namespace rayfarm::cli {
+namespace {
+struct CompareArgs {
+  std::string a, b, diff;
+  int threshold = 0;
+  int neighborhood = 0;
+  bool json = false;
+};
+}  // namespace
+
+Runner add_compare(CLI::App& app) {
+  auto args = std::make_shared<CompareArgs>();
+  app.add_option("a", args->a, "first image (PNG or PPM)")->required();
+  app.add_option("b", args->b, "second image (PNG or PPM)")->required();
+  app.add_option("--diff", args->diff, "write a heat map of the differences (PNG)");
+  app.add_option("--threshold", args->threshold, "channel difference that counts (0..255)")
+      ->check(CLI::Range(0, 255));
+  app.add_option("--neighborhood", args->neighborhood,
+                 "1: a pixel matches if any pixel of its 3x3 neighbourhood does")
+      ->check(CLI::Range(0, 1));
+  app.add_flag("--json", args->json, "print the metrics as JSON");
+  return [args]() -> int {
+    std::optional<Image> images[2];
+    const std::string* names[2] = {&args->a, &args->b};
+    for (int i = 0; i < 2; ++i) {
+      auto bytes = read_input(*names[i]);
+      if (!bytes) return kInputError;
+      std::string error;
+      images[i] = decode_image(*bytes, &error);
+      if (!images[i]) {
+        std::cerr << "rayfarm: " << *names[i] << ": " << error << "\n";
+        return kInputError;
+      }
+    }
+    CompareOptions options{args->threshold, args->neighborhood == 1};
+    std::string error;
+    auto r = compare_images(*images[0], *images[1], options, &error);
+    if (!r) {
+      std::cerr << "rayfarm: " << error << "\n";
+      return kInputError;
+    }
+    if (!args->diff.empty()) {
+      auto png = encode_image(diff_image(*images[0], *images[1], options), ImageFormat::png);
+      if (!write_output(args->diff, png.data(), png.size())) return kInputError;
+    }
+    if (args->json) {
+      nlohmann::json j = {{"width", r->width},
+                          {"height", r->height},
+                          {"rmse", r->rmse},
+                          {"psnr", std::isinf(r->psnr) ? nlohmann::json(nullptr) : nlohmann::json(r->psnr)},
+                          {"identical", r->max_abs == 0},
+                          {"max_abs", r->max_abs},
+                          {"mean_abs", r->mean_abs},
+                          {"differing_pixels", r->differing_pixels},
+                          {"differing_fraction", r->differing_fraction},
+                          {"off_by_more_than_1", r->off_by_more_than_1},
+                          {"threshold", options.threshold},
+                          {"neighborhood", options.neighborhood}};
+      std::cout << j.dump(2) << "\n";
+    } else {
+      std::printf("size              %dx%d\n", r->width, r->height);
+      std::printf("rmse              %.4f levels\n", r->rmse);
+      if (std::isinf(r->psnr)) std::printf("psnr              inf (identical)\n");
+      else std::printf("psnr              %.2f dB\n", r->psnr);
+      std::printf("max_abs           %d\n", r->max_abs);
+      std::printf("mean_abs          %.4f\n", r->mean_abs);
+      std::printf("differing_pixels  %lld (%.4f%%, threshold %d%s)\n", r->differing_pixels,
+                  100 * r->differing_fraction, options.threshold,
+                  options.neighborhood ? ", 3x3 neighbourhood" : "");
+      std::printf("off_by_more_than_1 %lld\n", r->off_by_more_than_1);
+    }
+    return kOk;
+  };
+}
+
+}  // namespace rayfarm::cli

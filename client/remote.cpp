@@ -1,0 +1,70 @@
+// HTTP client helpers.
+#include "remote.h"
+
+#include <cstdlib>
+#include <iostream>
+
+#include "cli_common.h"
+#include "rayfarm/diagnostic.h"
+
+namespace rayfarm::cli {
+
+std::unique_ptr<httplib::Client> Remote::client() const {
+  auto c = std::make_unique<httplib::Client>(url);
+  c->set_connection_timeout(5, 0);
+  c->set_read_timeout(600, 0);
+  c->set_write_timeout(60, 0);
+  return c;
+}
+
+httplib::Headers Remote::headers() const {
+  httplib::Headers h;
+  if (!token.empty()) h.emplace("Authorization", "Bearer " + token);
+  return h;
+}
+
+std::string server_url(const std::string& flag) {
+  std::string url = flag;
+  if (url.empty())
+    if (const char* env = std::getenv("RAYFARM_SERVER")) url = env;
+  if (!url.empty() && url.find("://") == std::string::npos) url = "http://" + url;
+  while (!url.empty() && url.back() == '/') url.pop_back();
+  return url;
+}
+
+std::string server_token(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  const char* env = std::getenv("RAYFARM_TOKEN");
+  return env ? env : "";
+}
+
+int report_http_error(const httplib::Result& result, const std::string& what,
+                      const std::string& scene_name, const std::string* scene_text) {
+  if (!result) {
+    std::cerr << "rayfarm: " << what << ": " << httplib::to_string(result.error()) << "\n";
+    return kServerError;
+  }
+  int status = result->status;
+  auto body = nlohmann::json::parse(result->body, nullptr, false);
+  std::string message = "HTTP " + std::to_string(status);
+  if (!body.is_discarded() && body.contains("error") && body["error"].is_object()) {
+    const auto& e = body["error"];
+    if (e.contains("errors") && e["errors"].is_array() && !scene_name.empty()) {
+      for (const auto& item : e["errors"]) {
+        Diagnostic d;
+        d.code = item.value("code", "");
+        d.message = item.value("message", "");
+        d.where = {item.value("line", 0), item.value("column", 0), item.value("path", "")};
+        std::cerr << format_diagnostic(d, scene_name, scene_text ? *scene_text : "");
+      }
+      return kInputError;
+    }
+    message = e.value("message", message);
+    if (e.contains("limit")) message += " (limit: " + e["limit"].get<std::string>() + ")";
+  }
+  std::cerr << "rayfarm: " << what << ": " << message << "\n";
+  bool client_fault = status >= 400 && status < 500 && status != 429 && status != 408;
+  return client_fault ? kInputError : kServerError;
+}
+
+}  // namespace rayfarm::cli

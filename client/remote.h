@@ -1,0 +1,38 @@
+// Talking to rayfarmd: submit, follow, fetch, cancel (SPEC §5, §6).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include "rayfarm/options.h"
+
+namespace rayfarm::cli {
+
+struct Remote {
+  std::string url;    // http://host:port
+  std::string token;  // bearer token, optional
+
+  std::unique_ptr<httplib::Client> client() const;
+  httplib::Headers headers() const;
+};
+
+// The server URL from the flag or RAYFARM_SERVER; empty when neither is set.
+std::string server_url(const std::string& flag);
+std::string server_token(const std::string& flag);
+
+// Prints a server error body (with FILE:LINE:COL for scene errors) and returns the exit code
+// it maps to: 1 for the request's fault (4xx), 3 for the server's (5xx, 429, network).
+// With the scene's text, scene errors are shown with their source line and a caret.
+int report_http_error(const httplib::Result& result, const std::string& what,
+                      const std::string& scene_name = "", const std::string* scene_text = nullptr);
+
+// `rayfarm render --server`: submits, shows progress, saves the image; Ctrl-C cancels.
+int remote_render(const std::string& scene_path, const std::string& text, const std::string& out,
+                  const OptionSet& options, const std::string& format, const Remote& remote,
+                  bool quiet);
+
+}  // namespace rayfarm::cli
