@@ -260,6 +260,7 @@ TEST(ImageIo, EmptyIdatChunksAreSkipped) {
   put_chunk(with_empty, "IDAT", "", 0);
   put_chunk(with_empty, "IEND", "", 0);
   EXPECT_EQ(decode_ok(with_empty).rgb, (std::vector<std::uint8_t>{1, 2, 3}));
+  decode_error(with_empty.substr(0, 33 + 8));  // the empty IDAT cut before its CRC
 }
 
 TEST(ImageIo, PngDataInflatingFarBeyondItsHeaderIsRefused) {

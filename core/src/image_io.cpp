@@ -54,15 +54,15 @@ std::uint32_t read_be32(std::string_view bytes, std::size_t at) {
 // (undefined behaviour, found by fuzzing). Empty IDATs carry nothing: the copy drops them all.
 std::optional<std::string> without_empty_idats(std::string_view png) {
   std::string out;
-  std::size_t copied = 0;  // bytes of `png` already in `out`
-  for (std::size_t at = 8; png.size() - at >= 12;) {
-    std::uint32_t length = read_be32(png, at);
-    if (length == 0 && png.substr(at + 4, 4) == "IDAT") {
+  std::size_t copied = 0;                            // bytes of `png` already in `out`
+  for (std::size_t at = 8; png.size() - at >= 8;) {  // 8: a chunk's length and type
+    std::uint64_t end = at + 12 + std::uint64_t{read_be32(png, at)};  // after its CRC
+    if (end == at + 12 && png.substr(at + 4, 4) == "IDAT") {
       out.append(png.substr(copied, at - copied));
-      copied = at + 12;
+      copied = std::min<std::uint64_t>(end, png.size());
     }
-    if (length > png.size() - at - 12) break;
-    at += 12 + length;
+    if (end > png.size()) break;
+    at = end;
   }
   if (copied == 0) return std::nullopt;
   out.append(png.substr(copied));
