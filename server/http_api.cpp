@@ -24,7 +24,7 @@ thread_local Clock::time_point request_start;
 
 void send_json(Response& res, int status, const Json& body) {
   res.status = status;
-  res.set_content(body.dump() + "\n", "application/json");
+  res.set_content(json_text(body) + "\n", "application/json");
 }
 
 void send_error(Response& res, const ApiError& e) {
@@ -109,6 +109,49 @@ bool send_result(Service& service, const Request& req, Response& res, const Job&
   return true;
 }
 
+struct StreamState {
+  std::uint64_t sent_version = ~0ULL;
+  Clock::time_point last_sent{};
+};
+
+// One event (or a keep-alive comment) of GET /jobs/ID/events; false ends the stream.
+bool send_next_event(Service& svc, const std::shared_ptr<Job>& job, StreamState& state,
+                     httplib::DataSink& sink) {
+  // At most ten events a second, at least four while the job changes.
+  std::this_thread::sleep_until(state.last_sent + std::chrono::milliseconds(100));
+  std::uint64_t version;
+  JobState js;
+  {
+    std::unique_lock lock(job->mu);
+    job->changed.wait_for(lock, std::chrono::milliseconds(250), [&] {
+      return job->version != state.sent_version || is_final(job->state);
+    });
+    version = job->version;
+    js = job->state;
+  }
+  if (!sink.is_writable()) return false;
+  if (svc.stopped() && !is_final(js)) {
+    std::string msg = "event: shutdown\ndata: {}\n\n";
+    sink.write(msg.data(), msg.size());
+    sink.done();
+    return true;
+  }
+  std::string event;
+  if (is_final(js)) {
+    event = "event: " + std::string(to_string(js)) + "\ndata: " +
+            json_text(svc.status(*job)) + "\n\n";
+  } else if (version != state.sent_version) {
+    event = "event: progress\ndata: " + json_text(svc.status(*job)) + "\n\n";
+  } else {
+    event = ": waiting\n\n";  // keeps proxies open and finds departed clients
+  }
+  state.sent_version = version;
+  state.last_sent = Clock::now();
+  if (!sink.write(event.data(), event.size())) return false;
+  if (is_final(js)) sink.done();
+  return true;
+}
+
 const std::set<std::string> kControlParams = {"wait", "sample"};
 
 }  // namespace
@@ -123,7 +166,10 @@ std::string route_label(const std::string& method, const std::string& path) {
   return method + " other";
 }
 
-HttpApi::HttpApi(Service& service) : service_(service) {
+HttpApi::HttpApi(Service& service)
+    : service_(service),
+      server_(ConnectionLimits{64 * 1024, std::chrono::milliseconds(static_cast<long long>(
+                                              service.settings().header_timeout * 1000))}) {
   harden();
   routes();
 }
@@ -132,47 +178,39 @@ void HttpApi::harden() {
   const Settings& s = service_.settings();
   const int threads = std::max(8, s.http_threads);
   server_.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  // Headers and body go out in separate writes: without TCP_NODELAY, Nagle's algorithm and
+  // the client's delayed ACK add 40 ms to every keep-alive response.
+  server_.set_tcp_nodelay(true);
+  // The library's default also sets SO_REUSEPORT, which would let a second server share the
+  // port silently; a second rayfarmd on a busy port should fail instead.
+  server_.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof(yes));
+  });
   server_.set_keep_alive_max_count(100);
   server_.set_keep_alive_timeout(2);
   server_.set_read_timeout(10, 0);
   server_.set_write_timeout(10, 0);
   server_.set_payload_max_length(s.max_body_bytes);
 
+  server_.set_expect_100_continue_handler([this](const Request& req, Response& res) {
+    // cpp-httplib would answer `100 Continue` before the pre-routing handler runs: check first,
+    // so that a client is never asked to send a body that is refused.
+    GuardedServer::head_complete();
+    if (!refuse(req, res)) return 100;
+    GuardedServer::close_after(res);
+    return res.status;
+  });
+
   server_.set_pre_routing_handler([this](const Request& req, Response& res) {
     request_start = Clock::now();
-    const Settings& st = service_.settings();
-    if (req.path.size() > kMaxPathLength) {
-      send_error(res, 414, "uri_too_long", "the request path is too long");
+    GuardedServer::head_complete();
+    if (refuse(req, res)) {
+      // The body (if any) is not read: it must not be taken for the next request.
+      if (req.has_header("Transfer-Encoding") ||
+          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0"))
+        GuardedServer::close_after(res);
       return httplib::Server::HandlerResponse::Handled;
-    }
-    // Chunked bodies skip the payload limit in this cpp-httplib; compressed ones are inflated
-    // without limit. Neither is needed by any client of this API.
-    if (req.has_header("Transfer-Encoding")) {
-      send_error(res, 411, "length_required",
-                 "chunked or otherwise transfer-encoded request bodies are not accepted; send "
-                 "the body with a Content-Length");
-      return httplib::Server::HandlerResponse::Handled;
-    }
-    if (req.has_header("Content-Encoding") &&
-        req.get_header_value("Content-Encoding") != "identity") {
-      send_error(res, 415, "unsupported_encoding",
-                 "compressed request bodies are not accepted; send the body uncompressed");
-      return httplib::Server::HandlerResponse::Handled;
-    }
-    if (req.has_header("Content-Length")) {
-      const std::string v = req.get_header_value("Content-Length");
-      bool digits = !v.empty() && v.size() < 19 &&
-                    std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
-      if (!digits || std::stoull(v) > st.max_body_bytes) {
-        ApiError e;
-        e.status = 413;
-        e.code = "body_too_large";
-        e.limit = "max_body_bytes";
-        e.message = "the request body is over the limit of " + std::to_string(st.max_body_bytes) +
-                    " bytes";
-        send_error(res, e);
-        return httplib::Server::HandlerResponse::Handled;
-      }
     }
     // curl --data-binary labels a scene as a urlencoded form; this cpp-httplib would then
     // parse the scene as query parameters and refuse bodies over 8 KiB. A scene is text.
@@ -180,21 +218,6 @@ void HttpApi::harden() {
       auto& headers = const_cast<Request&>(req).headers;  // the library's own, non-const object
       headers.erase("Content-Type");
       headers.emplace("Content-Type", "text/plain");
-    }
-    // One response sent once: a many-part Range request would multiply it.
-    if (req.ranges.size() > 1) {
-      send_error(res, 416, "range_not_satisfiable", "multi-range requests are not supported");
-      return httplib::Server::HandlerResponse::Handled;
-    }
-    if (!st.tokens.empty() && req.path != "/healthz" && req.path != "/metrics") {
-      std::string token = bearer_token(req);
-      bool ok = false;
-      for (const std::string& t : st.tokens) ok |= constant_time_equal(token, t);
-      if (!ok) {
-        res.set_header("WWW-Authenticate", "Bearer");
-        send_error(res, 401, "unauthorized", "a valid bearer token is required");
-        return httplib::Server::HandlerResponse::Handled;
-      }
     }
     return httplib::Server::HandlerResponse::Unhandled;
   });
@@ -226,6 +249,58 @@ void HttpApi::harden() {
                    req.path.substr(0, 200).c_str(), res.status, res.body.size(), ms,
                    client_of(req).c_str());
   });
+}
+
+bool HttpApi::refuse(const Request& req, Response& res) const {
+  const Settings& st = service_.settings();
+  if (req.path.size() > kMaxPathLength) {
+    send_error(res, 414, "uri_too_long", "the request path is too long");
+    return true;
+  }
+  // Chunked bodies skip the payload limit in this cpp-httplib; compressed ones are inflated
+  // without limit. Neither is needed by any client of this API.
+  if (req.has_header("Transfer-Encoding")) {
+    send_error(res, 411, "length_required",
+               "chunked or otherwise transfer-encoded request bodies are not accepted; send "
+               "the body with a Content-Length");
+    return true;
+  }
+  if (req.has_header("Content-Encoding") && req.get_header_value("Content-Encoding") != "identity") {
+    send_error(res, 415, "unsupported_encoding",
+               "compressed request bodies are not accepted; send the body uncompressed");
+    return true;
+  }
+  if (req.has_header("Content-Length")) {
+    const std::string v = req.get_header_value("Content-Length");
+    bool digits = !v.empty() && v.size() < 19 &&
+                  std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (!digits || std::stoull(v) > st.max_body_bytes) {
+      ApiError e;
+      e.status = 413;
+      e.code = "body_too_large";
+      e.limit = "max_body_bytes";
+      e.message = "the request body is over the limit of " + std::to_string(st.max_body_bytes) +
+                  " bytes";
+      send_error(res, e);
+      return true;
+    }
+  }
+  // One response sent once: a many-part Range request would multiply it.
+  if (req.ranges.size() > 1) {
+    send_error(res, 416, "range_not_satisfiable", "multi-range requests are not supported");
+    return true;
+  }
+  if (!st.tokens.empty() && req.path != "/healthz" && req.path != "/metrics") {
+    std::string token = bearer_token(req);
+    bool ok = false;
+    for (const std::string& t : st.tokens) ok |= constant_time_equal(token, t);
+    if (!ok) {
+      res.set_header("WWW-Authenticate", "Bearer");
+      send_error(res, 401, "unauthorized", "a valid bearer token is required");
+      return true;
+    }
+  }
+  return false;
 }
 
 void HttpApi::routes() {
@@ -351,49 +426,18 @@ void HttpApi::routes() {
       e.retry_after = 2;
       return send_error(res, e);
     }
-    struct StreamState {
-      std::uint64_t sent_version = ~0ULL;
-      Clock::time_point last_sent{};
-    };
     auto state = std::make_shared<StreamState>();
     res.set_header("Cache-Control", "no-cache");
     res.set_header("X-Accel-Buffering", "no");
     res.set_chunked_content_provider(
         "text/event-stream",
         [&svc, job, state](size_t, httplib::DataSink& sink) {
-          // At most ten events a second, at least four while the job changes.
-          std::this_thread::sleep_until(state->last_sent + std::chrono::milliseconds(100));
-          std::uint64_t version;
-          JobState js;
-          {
-            std::unique_lock lock(job->mu);
-            job->changed.wait_for(lock, std::chrono::milliseconds(250), [&] {
-              return job->version != state->sent_version || is_final(job->state);
-            });
-            version = job->version;
-            js = job->state;
+          // cpp-httplib calls providers outside its exception handling: nothing may escape.
+          try {
+            return send_next_event(svc, job, *state, sink);
+          } catch (const std::exception&) {
+            return false;
           }
-          if (!sink.is_writable()) return false;
-          if (svc.stopped() && !is_final(js)) {
-            std::string msg = "event: shutdown\ndata: {}\n\n";
-            sink.write(msg.data(), msg.size());
-            sink.done();
-            return true;
-          }
-          std::string event;
-          if (is_final(js)) {
-            event = "event: " + std::string(to_string(js)) + "\ndata: " +
-                    svc.status(*job).dump() + "\n\n";
-          } else if (version != state->sent_version) {
-            event = "event: progress\ndata: " + svc.status(*job).dump() + "\n\n";
-          } else {
-            event = ": waiting\n\n";  // keeps proxies open and finds departed clients
-          }
-          state->sent_version = version;
-          state->last_sent = Clock::now();
-          if (!sink.write(event.data(), event.size())) return false;
-          if (is_final(js)) sink.done();
-          return true;
         },
         [&svc](bool) { svc.release_stream(); });
   });

@@ -148,7 +148,8 @@ void Scheduler::prepare(const std::shared_ptr<Job>& job) {
     remove_and_finish(job, nullptr);
     return;
   }
-  if (job->cancel_requested) render->cancel();
+  // A cancel or a shutdown that came while the scene was being prepared.
+  if (job->cancel_requested || interrupt_.load()) render->cancel();
   if (hooks_.started) hooks_.started(*job);
   std::lock_guard lock(mu_);
   if (Entry* e = find(*job)) e->preparing = false;
@@ -167,17 +168,17 @@ void Scheduler::remove_and_finish(const std::shared_ptr<Job>& job, RenderJob* re
   cv_.notify_all();
 }
 
-void Scheduler::after_tile(const std::shared_ptr<Job>& job) {
-  std::shared_ptr<RenderJob> render;
+void Scheduler::after_tile(const std::shared_ptr<Job>& job, RenderJob& render) {
   {
     std::lock_guard jl(job->mu);
-    render = job->render;
-    job->stats = render->stats();
+    // Another worker may have finished the job meanwhile: its final stats stand.
+    if (is_final(job->state)) return;
+    job->stats = render.stats();
     ++job->version;
     if (job_timeout_s_ > 0 && std::chrono::steady_clock::now() - job->run_start >
                                   std::chrono::duration<double>(job_timeout_s_)) {
       job->timed_out = true;
-      render->cancel();
+      render.cancel();
     }
   }
   job->changed.notify_all();
@@ -223,7 +224,7 @@ void Scheduler::work() {
         ++tile_epoch_;
       }
       cv_.notify_all();
-      after_tile(p->job);
+      after_tile(p->job, *render);
       if (render->finished()) remove_and_finish(p->job, render.get());
     } else if (step == RenderJob::Step::wait) {
       std::lock_guard lock(mu_);
@@ -246,6 +247,7 @@ void Scheduler::drain(std::chrono::milliseconds grace) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::vector<std::shared_ptr<RenderJob>> running;
+  interrupt_ = true;  // renders being prepared now are canceled as they start
   {
     std::lock_guard lock(mu_);
     for (Client& c : clients_)

@@ -3,6 +3,7 @@
 // a big one gets its share at once. Renders never run on HTTP threads.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <functional>
@@ -64,7 +65,7 @@ class Scheduler {
   void prepare(const std::shared_ptr<Job>& job);
   void remove_and_finish(const std::shared_ptr<Job>& job, RenderJob* render);
   Entry* find(const Job& job);
-  void after_tile(const std::shared_ptr<Job>& job);
+  void after_tile(const std::shared_ptr<Job>& job, RenderJob& render);
 
   const int max_active_per_client_;
   const double job_timeout_s_;
@@ -76,6 +77,7 @@ class Scheduler {
   size_t next_client_ = 0;
   std::uint64_t tile_epoch_ = 0;
   bool paused_ = false;
+  std::atomic<bool> interrupt_{false};  // the grace period is over: running renders stop
   bool stopping_ = false;
   std::vector<std::thread> threads_;
 };
