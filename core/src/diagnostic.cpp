@@ -2,9 +2,56 @@
 #include "rayfarm/diagnostic.h"
 
 #include <algorithm>
+#include <cctype>
+#include <cstdint>
 #include <sstream>
 
 namespace rayfarm {
+
+namespace {
+
+// Length of the valid UTF-8 sequence at s[i], or 0.
+size_t utf8_length(std::string_view s, size_t i) {
+  auto byte = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
+  unsigned char c = byte(i);
+  size_t n = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : c >= 0xc2 ? 2 : 0;
+  if (n == 0 || c > 0xf4 || i + n > s.size()) return 0;
+  for (size_t k = 1; k < n; ++k)
+    if ((byte(i + k) & 0xc0) != 0x80) return 0;
+  unsigned char c1 = byte(i + 1);
+  if ((c == 0xe0 && c1 < 0xa0) || (c == 0xed && c1 > 0x9f) || (c == 0xf0 && c1 < 0x90) ||
+      (c == 0xf4 && c1 > 0x8f))
+    return 0;  // overlong, surrogate or beyond U+10FFFF
+  return n;
+}
+
+// Messages quote the input: keep each one short printable line of valid UTF-8 whatever was
+// sent, so it cannot break a terminal, a log line or a JSON error body.
+std::string clean(std::string message) {
+  constexpr size_t kMaxLength = 1000;
+  std::string out;
+  out.reserve(std::min(message.size(), kMaxLength));
+  for (size_t i = 0; i < message.size();) {
+    if (out.size() >= kMaxLength - 7) {
+      out += "...";
+      break;
+    }
+    auto c = static_cast<unsigned char>(message[i]);
+    if (c < 0x80) {
+      out += c < 0x20 || c == 0x7f ? '?' : static_cast<char>(c);
+      ++i;
+    } else if (size_t n = utf8_length(message, i)) {
+      out.append(message, i, n);
+      i += n;
+    } else {
+      out += '?';
+      ++i;
+    }
+  }
+  return out;
+}
+
+}  // namespace
 
 void Diagnostics::error(std::string code, std::string message, Where where) {
   ++errors_;
@@ -12,7 +59,8 @@ void Diagnostics::error(std::string code, std::string message, Where where) {
     truncated_ = true;
     return;
   }
-  items_.push_back({Severity::error, std::move(code), std::move(message), std::move(where)});
+  where.path = clean(std::move(where.path));
+  items_.push_back({Severity::error, std::move(code), clean(std::move(message)), std::move(where)});
 }
 
 void Diagnostics::warning(std::string code, std::string message, Where where) {
@@ -20,7 +68,9 @@ void Diagnostics::warning(std::string code, std::string message, Where where) {
     truncated_ = true;
     return;
   }
-  items_.push_back({Severity::warning, std::move(code), std::move(message), std::move(where)});
+  where.path = clean(std::move(where.path));
+  items_.push_back(
+      {Severity::warning, std::move(code), clean(std::move(message)), std::move(where)});
 }
 
 const Diagnostic* Diagnostics::first_error() const {
@@ -39,8 +89,8 @@ std::string_view source_line(std::string_view source, int line) {
     start = nl + 1;
   }
   size_t end = source.find('\n', start);
-  std::string_view text = source.substr(start, end == std::string_view::npos ? source.size() - start
-                                                                              : end - start);
+  std::string_view text =
+      source.substr(start, end == std::string_view::npos ? source.size() - start : end - start);
   if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
   return text;
 }
@@ -74,28 +124,30 @@ std::string format_diagnostics(const Diagnostics& ds, std::string_view file_name
   std::string out;
   for (const Diagnostic& d : ds.items()) out += format_diagnostic(d, file_name, source);
   if (ds.truncated())
-    out += std::string(file_name) + ": note: too many errors; " +
-           std::to_string(ds.error_count()) + " in all, only the first " +
-           std::to_string(Diagnostics::kMaxErrors) + " shown\n";
+    out += std::string(file_name) + ": note: too many errors; " + std::to_string(ds.error_count()) +
+           " in all, only the first " + std::to_string(Diagnostics::kMaxErrors) + " shown\n";
   return out;
 }
 
 namespace {
 
+// Optimal string alignment distance: Levenshtein plus adjacent transpositions, so the common
+// typo "lihgt" is one edit from "light", not two.
 size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  std::vector<size_t> before(b.size() + 1), above(b.size() + 1), row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) above[j] = j;
   for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diagonal = row[0];
     row[0] = i;
     for (size_t j = 1; j <= b.size(); ++j) {
-      size_t above = row[j];
       size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + cost});
-      diagonal = above;
+      row[j] = std::min({above[j] + 1, row[j - 1] + 1, above[j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        row[j] = std::min(row[j], before[j - 2] + 1);
     }
+    std::swap(before, above);
+    std::swap(above, row);
   }
-  return row[b.size()];
+  return above[b.size()];
 }
 
 }  // namespace
@@ -114,9 +166,10 @@ std::string nearest_word(std::string_view word, std::span<const std::string_view
       best = c;
     }
   }
-  // A typo is a small share of the word: "radious" -> "radius", but "foo" suggests nothing.
-  size_t allowed = std::max<size_t>(1, std::min(word.size(), best.size()) / 3);
-  if (best.empty() || best_distance > allowed) return {};
+  // A typo is a small share of the word: "radious" -> "radius", "plain" -> "plane", but "foo"
+  // suggests nothing, and neither does a rewrite of a whole short name ("x" -> "m").
+  size_t allowed = std::max<size_t>(1, (std::min(word.size(), best.size()) + 1) / 3);
+  if (best.empty() || best_distance > allowed || best_distance >= best.size()) return {};
   return std::string(best);
 }
 

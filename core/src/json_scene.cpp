@@ -1,7 +1,9 @@
-// JSON scene parser: nlohmann_json with a callback that bounds nesting and catches duplicate
-// keys (the library silently keeps the last), then a walk that reports errors by JSON path.
+// JSON scene parser: nlohmann_json's SAX parser feeding our own tree builder, which bounds
+// nesting, catches duplicate keys and keeps key order in linear time; then a walk that reports
+// errors by JSON path.
 #include "rayfarm/json_scene.h"
 
+#include <deque>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -15,9 +17,12 @@ using Json = nlohmann::ordered_json;
 std::string pointer_token(std::string_view key) {
   std::string out;
   for (char c : key) {
-    if (c == '~') out += "~0";
-    else if (c == '/') out += "~1";
-    else out += c;
+    if (c == '~')
+      out += "~0";
+    else if (c == '/')
+      out += "~1";
+    else
+      out += c;
   }
   return out;
 }
@@ -31,68 +36,138 @@ std::string child(const std::string& path, size_t index) {
 
 Where at(std::string path) { return {0, 0, std::move(path)}; }
 
-std::string type_name(const Json& j) {
-  if (j.is_number()) return "a number";
-  return std::string(j.is_array() ? "an " : "a ") + j.type_name();
+// A key or string from the input for a message, shortened.
+std::string printable(std::string_view s) {
+  constexpr size_t kMax = 60;
+  return s.size() > kMax ? std::string(s.substr(0, kMax)) + "..." : std::string(s);
 }
 
-// Tracks the JSON pointer of the value being parsed, for errors the callback finds.
-class ParseWatch {
+std::string type_name(const Json& j) {
+  if (j.is_number()) return "a number";
+  return std::string(j.is_array() || j.is_object() ? "an " : "a ") + j.type_name();
+}
+
+// Builds the document from SAX events. nlohmann's own builders are quadratic for scenes of
+// many entities (ordered_json looks keys up linearly; the callback parser rescans the parent
+// after every child), have no depth limit and silently keep the last of repeated keys.
+class TreeBuilder {
  public:
-  bool on_event(int depth, Json::parse_event_t event, Json& parsed) {
-    using E = Json::parse_event_t;
-    if (depth > kMaxJsonDepth) {
-      too_deep_ = true;
-      return false;
-    }
-    switch (event) {
-      case E::object_start:
-      case E::array_start:
-        element_started();
-        frames_.push_back({event == E::array_start, -1, {}, {}});
-        break;
-      case E::key: {
-        Frame& f = frames_.back();
-        f.key = parsed.get<std::string>();
-        if (!f.keys.insert(f.key).second && duplicates_.size() < 20)
-          duplicates_.push_back(path() );
-        break;
-      }
-      case E::value:
-        element_started();
-        break;
-      case E::object_end:
-      case E::array_end:
-        if (!frames_.empty()) frames_.pop_back();
-        break;
-    }
+  bool null() { return add(nullptr); }
+  bool boolean(bool v) { return add(v); }
+  bool number_integer(Json::number_integer_t v) { return add(v); }
+  bool number_unsigned(Json::number_unsigned_t v) { return add(v); }
+  bool number_float(Json::number_float_t v, const std::string&) { return add(v); }
+  bool string(std::string& v) { return add(std::move(v)); }
+  bool binary(Json::binary_t&) { return add(nullptr); }  // JSON text has none
+  bool start_object(std::size_t) { return open(Json::object()); }
+  bool start_array(std::size_t) { return open(Json::array()); }
+  bool end_object() { return close(); }
+  bool end_array() { return close(); }
+
+  bool key(std::string& k) {
+    Frame& f = frames_.back();
+    f.key = std::move(k);
+    f.repeated = !f.keys.insert(f.key).second;
+    if (f.repeated && duplicates_.size() < 20) duplicates_.push_back(path());
     return true;
   }
 
+  bool parse_error(std::size_t position, const std::string& token, const Json::exception& e) {
+    if (e.id == 406) {  // "number overflow parsing": point at the start of the number
+      error_offset_ = position >= token.size() ? position - token.size() : 0;
+      error_ = "the number " + token.substr(0, 60) + " is too large for a double";
+    } else {  // the position is one past the character that failed
+      error_offset_ = position > 0 ? position - 1 : 0;
+      error_ = error_text(e.what());
+    }
+    return false;
+  }
+
+  const Json& root() const { return root_; }
   bool too_deep() const { return too_deep_; }
+  const std::string& error() const { return error_; }
+  size_t error_offset() const { return error_offset_; }
   const std::vector<std::string>& duplicates() const { return duplicates_; }
+
+  // nlohmann's message without its "[json.exception...] " and "parse error at line L,
+  // column C: " prefixes (the position is reported separately).
+  static std::string error_text(const std::string& what) {
+    std::string text = what;
+    if (text.starts_with("[json.exception.")) {
+      size_t close = text.find("] ");
+      if (close != std::string::npos) text = text.substr(close + 2);
+    }
+    if (text.starts_with("parse error")) {
+      size_t colon = text.find(": ");
+      if (colon != std::string::npos) text = text.substr(colon + 2);
+    }
+    return text;
+  }
 
  private:
   struct Frame {
-    bool array;
-    long index;
-    std::string key;
+    Json* node = nullptr;
+    long index = -1;  // arrays: the element being read
+    std::string key;  // objects: the member being read
+    bool repeated = false;
     std::set<std::string> keys;
   };
 
-  void element_started() {
-    if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+  // Where the next value goes: the root, a new array element or a new member. A repeated
+  // key's value is parsed into scratch space and dropped (it is reported as an error).
+  Json* slot() {
+    if (frames_.empty()) return &root_;
+    Frame& f = frames_.back();
+    if (f.node->is_array()) {
+      ++f.index;
+      f.node->push_back(nullptr);
+      return &f.node->back();
+    }
+    if (f.repeated) return &scratch_.emplace_back();
+    // Keys are unique here, so skip ordered_json's linear search for them.
+    auto& members = static_cast<Json::object_t::Container&>(f.node->get_ref<Json::object_t&>());
+    members.emplace_back(f.key, nullptr);
+    return &members.back().second;
+  }
+
+  template <class V>
+  bool add(V&& v) {
+    *slot() = Json(std::forward<V>(v));
+    return true;
+  }
+
+  bool open(Json container) {
+    if (frames_.size() >= static_cast<size_t>(kMaxJsonDepth)) {
+      too_deep_ = true;
+      return false;
+    }
+    Json* node = slot();
+    *node = std::move(container);
+    // Safe to keep: a container only grows while it is the innermost one.
+    Frame frame;
+    frame.node = node;
+    frames_.push_back(std::move(frame));
+    return true;
+  }
+
+  bool close() {
+    frames_.pop_back();
+    return true;
   }
 
   std::string path() const {
     std::string p;
     for (const Frame& f : frames_)
-      p += f.array ? "/" + std::to_string(f.index) : "/" + pointer_token(f.key);
+      p += f.node->is_array() ? "/" + std::to_string(f.index) : "/" + pointer_token(f.key);
     return p;
   }
 
+  Json root_;
   std::vector<Frame> frames_;
+  std::deque<Json> scratch_;
   std::vector<std::string> duplicates_;
+  std::string error_;
+  size_t error_offset_ = 0;
   bool too_deep_ = false;
 };
 
@@ -140,28 +215,30 @@ class JsonSceneReader {
 
  private:
   bool expect(bool ok, const Json& value, std::string_view what, const std::string& path) {
-    if (!ok) diags_.error("json-type", "expected " + std::string(what) + ", got " +
-                                           type_name(value), at(path));
+    if (!ok)
+      diags_.error("json-type", "expected " + std::string(what) + ", got " + type_name(value),
+                   at(path));
     return ok;
   }
 
-  void unknown_key(const std::string& key, std::span<const std::string_view> known,
-                   const std::string& path) {
+  // Reports an unknown key; returns the key it probably meant, if any.
+  std::string unknown_key(const std::string& key, std::span<const std::string_view> known,
+                          const std::string& path) {
     std::string list;
     for (auto k : known) list += (list.empty() ? "" : ", ") + std::string(k);
     std::string hint = nearest_word(key, known);
     diags_.error("unknown-key",
-                 "unknown key \"" + key.substr(0, 60) + "\" (expected one of: " + list + ")" +
+                 "unknown key \"" + printable(key) + "\" (expected one of: " + list + ")" +
                      (hint.empty() ? "" : "; did you mean \"" + hint + "\"?"),
                  at(path));
+    return hint;
   }
 
   void read_object(const Json& value, const std::string& path, SceneDesc& scene) {
     if (!expect(value.is_object(), value, "an object", path)) return;
     auto type = value.find("type");
     if (type == value.end()) {
-      diags_.error("missing-attribute", "object needs \"type\": \"sphere\" or \"plane\"",
-                   at(path));
+      diags_.error("missing-attribute", "object needs \"type\": \"sphere\" or \"plane\"", at(path));
       return;
     }
     if (!type->is_string() || (*type != "sphere" && *type != "plane")) {
@@ -169,7 +246,7 @@ class JsonSceneReader {
       static constexpr std::string_view kTypes[] = {"sphere", "plane"};
       std::string hint = nearest_word(got, kTypes);
       diags_.error("unknown-entity",
-                   "unknown object type \"" + got.substr(0, 60) +
+                   "unknown object type \"" + printable(got) +
                        "\" (expected \"sphere\" or \"plane\")" +
                        (hint.empty() ? "" : "; did you mean \"" + hint + "\"?"),
                    at(child(path, "type")));
@@ -193,7 +270,7 @@ class JsonSceneReader {
       e.name_where = at(path);
       if (!(kind == EntityKind::camera && name->empty()) && !is_valid_name(*name))
         diags_.error("bad-name",
-                     "invalid " + std::string(spec.keyword) + " name \"" + name->substr(0, 60) +
+                     "invalid " + std::string(spec.keyword) + " name \"" + printable(*name) +
                          "\": names are letters, digits, '_', '.', '-' and start with a letter "
                          "or '_'",
                      at(path));
@@ -213,20 +290,24 @@ class JsonSceneReader {
           e.name = v.get<std::string>();
           e.name_where = at(vpath);
           if (!is_valid_name(e.name))
-            diags_.error("bad-name", "invalid name \"" + e.name.substr(0, 60) + "\"", at(vpath));
+            diags_.error("bad-name", "invalid name \"" + printable(e.name) + "\"", at(vpath));
         }
         continue;
       }
       const AttrSpec* attr = find_attr(spec, key);
       if (!attr) {
-        unknown_key(key, keys, vpath);
+        // The attribute it was meant to be is then not also "missing".
+        std::string hint = unknown_key(key, keys, vpath);
+        if (find_attr(spec, hint)) e.invalid_keys.push_back(hint);
         continue;
       }
       AttrDesc a;
       a.key = key;
       a.where = at(vpath);
-      if (read_value(*attr, v, vpath, a)) e.attrs.push_back(std::move(a));
-      else e.invalid_keys.push_back(key);
+      if (read_value(*attr, v, vpath, a))
+        e.attrs.push_back(std::move(a));
+      else
+        e.invalid_keys.push_back(key);
     }
     scene.entities.push_back(std::move(e));
   }
@@ -235,6 +316,10 @@ class JsonSceneReader {
     if (attr.kind == ValueKind::material_ref) {
       if (!expect(v.is_string(), v, "a material name", path)) return false;
       a.word = v.get<std::string>();
+      if (!is_valid_name(a.word)) {
+        diags_.error("bad-name", "invalid material name \"" + printable(a.word) + "\"", at(path));
+        return false;
+      }
       a.value_where.push_back(at(path));
       return true;
     }
@@ -248,11 +333,11 @@ class JsonSceneReader {
       expect(false, v, describe(attr.kind), path);
       return false;
     }
-    int n = static_cast<int>(v.size());
-    if (n < lo || n > hi || (hi == 3 && lo == 1 && n == 2)) {
+    int n = static_cast<int>(std::min<size_t>(v.size(), 1000));
+    if (n < lo || n > hi || (attr.kind == ValueKind::colour && n == 2)) {
       diags_.error("value-count",
                    "\"" + a.key + "\" takes " + std::string(describe(attr.kind)) + ", got " +
-                       std::to_string(n) + (n == 1 ? " value" : " values"),
+                       std::to_string(v.size()) + (v.size() == 1 ? " value" : " values"),
                    at(path));
       return false;
     }
@@ -274,11 +359,16 @@ class JsonSceneReader {
     for (auto& [key, v] : value.items()) {
       std::string vpath = child(path, key);
       std::string text;
-      if (v.is_string()) text = v.get<std::string>();
-      else if (v.is_boolean()) text = v.get<bool>() ? "true" : "false";
-      else if (v.is_number_unsigned()) text = std::to_string(v.get<std::uint64_t>());
-      else if (v.is_number_integer()) text = std::to_string(v.get<std::int64_t>());
-      else if (v.is_number()) text = format_number(v.get<double>());
+      if (v.is_string())
+        text = v.get<std::string>();
+      else if (v.is_boolean())
+        text = v.get<bool>() ? "true" : "false";
+      else if (v.is_number_unsigned())
+        text = std::to_string(v.get<std::uint64_t>());
+      else if (v.is_number_integer())
+        text = std::to_string(v.get<std::int64_t>());
+      else if (v.is_number())
+        text = format_number(v.get<double>());
       else if (v.is_array() && v.size() <= 3) {
         for (const Json& c : v) {
           if (!c.is_number()) {
@@ -291,8 +381,9 @@ class JsonSceneReader {
         text = "?";
       }
       if (text == "?") {
-        diags_.error("bad-option", "render option \"" + key.substr(0, 60) +
-                                       "\" has a value of the wrong type (" + type_name(v) + ")",
+        diags_.error("bad-option",
+                     "render option \"" + printable(key) + "\" has a value of the wrong type (" +
+                         type_name(v) + ")",
                      at(vpath));
         continue;
       }
@@ -303,50 +394,44 @@ class JsonSceneReader {
   Diagnostics& diags_;
 };
 
-// nlohmann's message after its "[json.exception...] parse error at line L, column C: " prefix.
-std::string parse_error_text(const std::string& what) {
-  size_t colon = what.find(": ");
-  std::string text = colon == std::string::npos ? what : what.substr(colon + 2);
-  return text;
+Where position_of_offset(std::string_view text, size_t offset) {
+  Where w{1, 1, {}};
+  size_t start = text.starts_with("\xEF\xBB\xBF") ? 3 : 0;  // a byte-order mark takes no column
+  for (size_t i = start; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++w.line;
+      w.column = 1;
+    } else {
+      ++w.column;
+    }
+  }
+  return w;
 }
 
 }  // namespace
 
 SceneDesc parse_json_scene(std::string_view text, Diagnostics& diags) {
-  ParseWatch watch;
-  Json root;
+  TreeBuilder builder;
+  bool parsed = false;
   try {
-    root = Json::parse(text.begin(), text.end(),
-                       [&watch](int depth, Json::parse_event_t event, Json& parsed) {
-                         return watch.on_event(depth, event, parsed);
-                       });
-  } catch (const Json::parse_error& e) {
-    // Position from the byte offset nlohmann reports (1-based, one past the error).
-    size_t offset = e.byte > 0 ? std::min<size_t>(e.byte - 1, text.size()) : 0;
-    int line = 1, column = 1;
-    for (size_t i = 0; i < offset; ++i) {
-      if (text[i] == '\n') {
-        ++line;
-        column = 1;
-      } else {
-        ++column;
-      }
-    }
-    diags.error("json-syntax", "invalid JSON: " + parse_error_text(e.what()),
-                {line, column, {}});
-    return {};
+    parsed = Json::sax_parse(text.begin(), text.end(), &builder);
   } catch (const Json::exception& e) {
-    diags.error("json-syntax", std::string("invalid JSON: ") + e.what(), {});
+    diags.error("json-syntax", "invalid JSON: " + TreeBuilder::error_text(e.what()), {});
     return {};
   }
-  if (watch.too_deep()) {
+  if (builder.too_deep()) {
     diags.error("json-depth",
                 "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels", at(""));
     return {};
   }
-  for (const std::string& path : watch.duplicates())
+  if (!parsed) {
+    diags.error("json-syntax", "invalid JSON: " + builder.error(),
+                position_of_offset(text, builder.error_offset()));
+    return {};
+  }
+  for (const std::string& path : builder.duplicates())
     diags.error("duplicate-key", "key given twice", at(path));
-  return JsonSceneReader(diags).read(root);
+  return JsonSceneReader(diags).read(builder.root());
 }
 
 }  // namespace rayfarm

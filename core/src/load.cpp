@@ -7,6 +7,7 @@
 namespace rayfarm {
 
 SceneFormat detect_format(std::string_view text) {
+  if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);  // UTF-8 byte-order mark
   for (char c : text) {
     if (c == ' ' || c == '\t' || c == '\n' || c == '\r') continue;
     return c == '{' ? SceneFormat::json : SceneFormat::model;
@@ -17,7 +18,7 @@ SceneFormat detect_format(std::string_view text) {
 LoadedScene load_scene(std::string_view text) {
   LoadedScene out;
   out.desc = detect_format(text) == SceneFormat::json ? parse_json_scene(text, out.diags)
-                                                       : parse_model(text, out.diags);
+                                                      : parse_model(text, out.diags);
   // Build even after parse errors, so missing attributes and bad references are reported in
   // the same pass; only input that did not parse at all (JSON syntax) stops here.
   if (!out.diags.has_errors() || !out.desc.entities.empty())

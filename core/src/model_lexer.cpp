@@ -10,6 +10,11 @@ bool is_space(char c) {
 
 }  // namespace
 
+// Windows editors start UTF-8 files with a byte-order mark; columns count from after it.
+ModelLexer::ModelLexer(std::string_view text) : text_(text) {
+  if (text_.starts_with("\xEF\xBB\xBF")) pos_ = line_start_ = 3;
+}
+
 const Token& ModelLexer::peek(int ahead) {
   while (buffered_ <= ahead) buffer_[buffered_++] = scan();
   return buffer_[ahead];

@@ -16,7 +16,7 @@ struct Token {
 // name from a missing brace), so a 7 MB file never becomes a vector of tokens.
 class ModelLexer {
  public:
-  explicit ModelLexer(std::string_view text) : text_(text) {}
+  explicit ModelLexer(std::string_view text);
 
   const Token& peek(int ahead = 0);
   Token next();

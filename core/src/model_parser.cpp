@@ -2,6 +2,7 @@
 // error in a file is reported, not only the first.
 #include "rayfarm/model_parser.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,10 +28,13 @@ bool starts_like_number(std::string_view s) {
 
 bool is_nan_or_inf_word(std::string_view s) {
   if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.remove_prefix(1);
-  std::string l(s);
+  std::string l(s.substr(0, 9));
   for (char& c : l) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return l == "nan" || l == "inf" || l == "infinity";
+  return l == "nan" || l == "inf" || l == "infinity" || l.starts_with("nan(");
 }
+
+// A token written where a number belongs, even if it turns out not to be one.
+bool looks_like_value(std::string_view s) { return starts_like_number(s) || is_nan_or_inf_word(s); }
 
 std::vector<std::string_view> attr_names(const EntitySpec& spec) {
   std::vector<std::string_view> names;
@@ -41,6 +45,19 @@ std::vector<std::string_view> attr_names(const EntitySpec& spec) {
 std::string with_hint(std::string message, const std::string& hint) {
   if (!hint.empty()) message += " (did you mean '" + hint + "'?)";
   return message;
+}
+
+// Whether `n` values are a complete value of this kind (a colour is 1 or 3 numbers, not 2).
+bool valid_count(ValueKind kind, int n) {
+  auto [lo, hi] = value_count(kind);
+  if (kind == ValueKind::colour && n == 2) return false;
+  return n >= lo && n <= hi;
+}
+
+// An entity whose body could not be read: every attribute counts as written-but-bad, so the
+// scene builder reports none of them missing.
+void mark_all_invalid(EntityDesc& e) {
+  for (const AttrSpec& a : entity_spec(e.kind).attrs) e.invalid_keys.emplace_back(a.key);
 }
 
 class ModelParser {
@@ -55,29 +72,49 @@ class ModelParser {
         diags_.error("unbalanced-brace", "unmatched '}'", at(t));
         lex_.next();
       } else if (t.kind == Token::open) {
-        diags_.error("syntax", "unexpected '{': expected an entity (camera, material, light, "
-                     "sphere, plane)", at(t));
+        diags_.error("syntax",
+                     "unexpected '{': expected an entity (camera, material, light, "
+                     "sphere, plane)",
+                     at(t));
         skip_block();
       } else if (const EntitySpec* spec = find_entity(t.text)) {
         scene.entities.push_back(parse_entity(*spec));
-      } else {
-        unknown_entity();
+      } else if (auto stand_in = unknown_entity()) {
+        scene.entities.push_back(std::move(*stand_in));
       }
     }
     return scene;
   }
 
  private:
-  void unknown_entity() {
+  // Skips an unknown entity with its "NAME { ... }". When the word is a typo of a keyword, a
+  // stand-in of that kind keeps its name, so a misspelt camera or material does not also
+  // cause "no camera" or "undefined material".
+  std::optional<EntityDesc> unknown_entity() {
     Token t = lex_.next();
     std::string hint = nearest_word(t.text, entity_keywords());
+    std::string what = looks_like_value(t.text)
+                           ? "unexpected value " + quoted(t.text) + " outside an entity"
+                           : "unknown entity " + quoted(t.text);
     diags_.error("unknown-entity",
-                 with_hint("unknown entity " + quoted(t.text) +
-                               "; expected camera, material, light, sphere or plane", hint),
+                 with_hint(what + "; expected camera, material, light, sphere or plane", hint),
                  at(t));
-    // Skip "NAME { ... }" that belongs to it, so its attributes do not cascade.
-    if (lex_.peek().kind == Token::word && lex_.peek(1).kind == Token::open) lex_.next();
+    std::optional<EntityDesc> stand_in;
+    if (const EntitySpec* guess = hint.empty() ? nullptr : find_entity(hint)) {
+      stand_in.emplace();
+      stand_in->kind = guess->kind;
+      stand_in->where = at(t);
+      mark_all_invalid(*stand_in);
+    }
+    if (lex_.peek().kind == Token::word && lex_.peek(1).kind == Token::open) {
+      Token name = lex_.next();
+      if (stand_in && is_valid_name(name.text)) {
+        stand_in->name = std::string(name.text);
+        stand_in->name_where = at(name);
+      }
+    }
     if (lex_.peek().kind == Token::open) skip_block();
+    return stand_in;
   }
 
   // Skips a balanced { ... } starting at the current '{'.
@@ -102,10 +139,13 @@ class ModelParser {
     e.where = at(keyword);
     std::string_view kw = spec.keyword;
 
-    // NAME, unless the next word is an attribute (then the '{' is what is missing).
+    // NAME, unless the next word is an attribute or starts the next entity (then the '{' is
+    // what is missing).
     const Token& maybe_name = lex_.peek();
-    bool named = maybe_name.kind == Token::word &&
-                 (lex_.peek(1).kind == Token::open || !find_attr(spec, maybe_name.text));
+    bool named =
+        maybe_name.kind == Token::word &&
+        (lex_.peek(1).kind == Token::open || (!find_attr(spec, maybe_name.text) &&
+                                              !(find_entity(maybe_name.text) && starts_entity(1))));
     if (named) {
       Token name = lex_.next();
       e.name = std::string(name.text);
@@ -114,11 +154,13 @@ class ModelParser {
         diags_.error("bad-name",
                      "invalid " + std::string(kw) + " name " + quoted(name.text) +
                          ": names are letters, digits, '_', '.', '-' and start with a letter "
-                         "or '_' (at most " + std::to_string(kMaxNameLength) + " characters)",
+                         "or '_' (at most " +
+                         std::to_string(kMaxNameLength) + " characters)",
                      at(name));
     } else if (spec.name_required) {
-      diags_.error("missing-name", std::string(kw) + " needs a name: " + std::string(kw) +
-                                       " NAME { ... }", at(keyword));
+      diags_.error("missing-name",
+                   std::string(kw) + " needs a name: " + std::string(kw) + " NAME { ... }",
+                   at(keyword));
     }
 
     Token open = lex_.peek();
@@ -127,9 +169,13 @@ class ModelParser {
       lex_.next();
     } else {
       diags_.error("syntax", "expected '{' after " + describe_entity(e), at(open));
-      if (open.kind != Token::word || !find_attr(spec, open.text)) return e;
+      if (open.kind != Token::word || !find_attr(spec, open.text)) {
+        mark_all_invalid(e);
+        return e;
+      }
     }
 
+    std::vector<int> first_line(spec.attrs.size(), 0);
     for (;;) {
       const Token& t = lex_.peek();
       if (t.kind == Token::end) {
@@ -147,7 +193,7 @@ class ModelParser {
         continue;
       }
       if (const AttrSpec* attr = find_attr(spec, t.text)) {
-        parse_attr(spec, *attr, e);
+        parse_attr(spec, *attr, e, first_line[attr - spec.attrs.data()]);
         continue;
       }
       if (find_entity(t.text) && starts_entity(1)) {
@@ -169,77 +215,110 @@ class ModelParser {
     return a.kind == Token::word && lex_.peek(ahead + 1).kind == Token::open;
   }
 
-  void unknown_attr(const EntitySpec& spec, const EntityDesc& e) {
+  // True when the current word ends an attribute's values: the next attribute, a likely typo
+  // of one (reported on its own), or the next entity.
+  bool ends_values(const EntitySpec& spec, std::string_view word) {
+    if (find_attr(spec, word)) return true;
+    if (looks_like_value(word)) return false;
+    return !nearest_word(word, attr_names(spec)).empty() || (find_entity(word) && starts_entity(1));
+  }
+
+  void unknown_attr(const EntitySpec& spec, EntityDesc& e) {
     Token t = lex_.next();
     std::string list;
     for (const AttrSpec& a : spec.attrs) list += (list.empty() ? "" : ", ") + std::string(a.key);
-    std::string hint = nearest_word(t.text, attr_names(spec));
-    std::string what = starts_like_number(t.text) || is_nan_or_inf_word(t.text)
-                           ? "unexpected value " + quoted(t.text) + " in "
-                           : "unknown attribute " + quoted(t.text) + " for ";
-    diags_.error("unknown-attribute",
-                 with_hint(what + describe_entity(e) + " (attributes: " + list + ")", hint),
-                 at(t));
-    // Skip its values: everything up to the next known attribute or brace.
-    while (lex_.peek().kind == Token::word && !find_attr(spec, lex_.peek().text) &&
-           !(find_entity(lex_.peek().text) && starts_entity(1)))
-      lex_.next();
+    if (looks_like_value(t.text)) {
+      diags_.error("unexpected-value",
+                   "unexpected value " + quoted(t.text) + " in " + describe_entity(e) +
+                       ": every value follows an attribute (" + list + ")",
+                   at(t));
+    } else {
+      std::string hint = nearest_word(t.text, attr_names(spec));
+      diags_.error("unknown-attribute",
+                   with_hint("unknown attribute " + quoted(t.text) + " for " + describe_entity(e) +
+                                 " (attributes: " + list + ")",
+                             hint),
+                   at(t));
+      // The attribute it was meant to be is then not also "missing".
+      if (!hint.empty()) e.invalid_keys.push_back(hint);
+    }
+    while (lex_.peek().kind == Token::word && !ends_values(spec, lex_.peek().text)) lex_.next();
   }
 
-  void parse_attr(const EntitySpec& spec, const AttrSpec& attr, EntityDesc& e) {
+  void parse_attr(const EntitySpec& spec, const AttrSpec& attr, EntityDesc& e, int& first_line) {
     Token key = lex_.next();
     AttrDesc a;
     a.key = std::string(key.text);
     a.where = at(key);
-    if (const AttrDesc* first = e.find(a.key))
+    bool duplicate = first_line > 0;
+    if (duplicate)
       diags_.error("duplicate-attribute",
                    "attribute '" + a.key + "' given twice in " + describe_entity(e) +
-                       " (first at line " + std::to_string(first->where.line) + ")",
+                       " (first at line " + std::to_string(first_line) + ")",
                    a.where);
+    else
+      first_line = key.line;
 
     if (attr.kind == ValueKind::material_ref) {
       const Token& v = lex_.peek();
-      if (v.kind != Token::word || (find_attr(spec, v.text) && lex_.peek(1).kind == Token::word)) {
+      if (v.kind != Token::word || looks_like_value(v.text) ||
+          (find_attr(spec, v.text) && lex_.peek(1).kind == Token::word) ||
+          (find_entity(v.text) && starts_entity(1))) {
         diags_.error("missing-value", "'" + a.key + "' needs a material name", at(v));
-        e.invalid_keys.push_back(a.key);
+        if (v.kind == Token::word && looks_like_value(v.text)) lex_.next();
+        if (!duplicate) e.invalid_keys.push_back(a.key);
         return;
       }
       Token name = lex_.next();
       a.word = std::string(name.text);
       a.value_where.push_back(at(name));
-      if (!is_valid_name(name.text))
+      if (!is_valid_name(name.text)) {
         diags_.error("bad-name", "invalid material name " + quoted(name.text), at(name));
-      if (!e.find(a.key)) e.attrs.push_back(std::move(a));
+        if (!duplicate) e.invalid_keys.push_back(a.key);
+        return;
+      }
+      if (!duplicate) e.attrs.push_back(std::move(a));
       return;
     }
 
+    auto [lo, hi] = value_count(attr.kind);
     bool bad = false;
-    while (lex_.peek().kind == Token::word) {
+    int n = 0;
+    Where first_extra;
+    for (;;) {
       const Token& v = lex_.peek();
-      if (find_attr(spec, v.text)) break;
-      if (!starts_like_number(v.text) && !is_nan_or_inf_word(v.text)) break;
+      if (v.kind != Token::word || find_attr(spec, v.text)) break;
+      // A word where a number is still needed is a bad number ("radius abc"), unless it
+      // is a typo of the next attribute or the next entity.
+      if (!looks_like_value(v.text) &&
+          (valid_count(attr.kind, n) || n >= hi || ends_values(spec, v.text)))
+        break;
       Token tok = lex_.next();
+      ++n;
       std::string why;
-      if (auto n = parse_number(tok.text, &why)) {
-        a.numbers.push_back(*n);
-        a.value_where.push_back(at(tok));
-      } else {
+      std::optional<double> number = parse_number(tok.text, &why);
+      if (!number) {
         diags_.error("not-a-number", quoted(tok.text) + " is not a number: " + why, at(tok));
         bad = true;
+      } else if (n <= hi) {
+        a.numbers.push_back(*number);
+        a.value_where.push_back(at(tok));
+      } else if (n == hi + 1) {
+        first_extra = at(tok);
       }
-      if (a.numbers.size() > 16) break;  // absurd counts are reported below, not read forever
     }
-    auto [lo, hi] = value_count(attr.kind);
-    int n = static_cast<int>(a.numbers.size());
-    if (!bad && (n < lo || n > hi)) {
+    if (!bad && !valid_count(attr.kind, n)) {
       diags_.error("value-count",
                    "'" + a.key + "' takes " + std::string(describe(attr.kind)) + ", got " +
                        std::to_string(n) + (n == 1 ? " value" : " values"),
-                   n > hi ? a.value_where[hi] : a.where);
+                   n > hi ? first_extra : a.where);
       bad = true;
     }
-    if (bad) e.invalid_keys.push_back(a.key);
-    else if (!e.find(a.key)) e.attrs.push_back(std::move(a));
+    if (duplicate) return;
+    if (bad)
+      e.invalid_keys.push_back(a.key);
+    else
+      e.attrs.push_back(std::move(a));
   }
 
   std::string describe_entity(const EntityDesc& e) const {

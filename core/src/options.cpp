@@ -33,6 +33,12 @@ constexpr OptionSpec kOptions[] = {
     {"specialize", "true|false", "run only the pipeline parts the scene needs (false: testing)"},
 };
 
+// A value as echoed in a message, shortened.
+std::string shown(std::string_view v) {
+  constexpr size_t kMax = 60;
+  return v.size() > kMax ? std::string(v.substr(0, kMax)) + "..." : std::string(v);
+}
+
 std::optional<long long> parse_integer(std::string_view v) {
   long long out = 0;
   if (!v.empty() && v.front() == '+') v.remove_prefix(1);
@@ -51,7 +57,7 @@ std::optional<std::string> int_in(std::string_view v, long long lo, long long hi
   auto n = parse_integer(v);
   if (!n || *n < lo || *n > hi)
     return "must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" +
-           std::string(v) + "'";
+           shown(v) + "'";
   out = static_cast<int>(*n);
   return std::nullopt;
 }
@@ -60,10 +66,10 @@ std::optional<std::string> number_at_least(std::string_view v, double lo, bool s
                                            double& out) {
   std::string why;
   auto n = parse_number(v, &why);
-  if (!n) return "'" + std::string(v) + "' is not a number (" + why + ")";
+  if (!n) return "'" + shown(v) + "' is not a number (" + why + ")";
   if (strict ? !(*n > lo) : !(*n >= lo))
     return std::string("must be ") + (strict ? "> " : ">= ") + format_number(lo) + ", got " +
-           std::string(v);
+           shown(v);
   out = *n;
   return std::nullopt;
 }
@@ -96,26 +102,35 @@ std::optional<std::string> apply_option(RenderOptions& o, std::string_view name,
   if (name == "time_limit") return number_at_least(value, 0, false, o.time_limit);
   if (name == "shadows" || name == "specialize") {
     auto b = parse_bool(value);
-    if (!b) return "must be true or false, got '" + std::string(value) + "'";
+    if (!b) return "must be true or false, got '" + shown(value) + "'";
     (name == "shadows" ? o.shadows : o.specialize) = *b;
     return std::nullopt;
   }
   if (name == "highlight") {
-    if (value == "phong") o.highlight = Highlight::phong;
-    else if (value == "blinn") o.highlight = Highlight::blinn;
-    else return "must be phong or blinn, got '" + std::string(value) + "'";
+    if (value == "phong")
+      o.highlight = Highlight::phong;
+    else if (value == "blinn")
+      o.highlight = Highlight::blinn;
+    else
+      return "must be phong or blinn, got '" + shown(value) + "'";
     return std::nullopt;
   }
   if (name == "precision") {
-    if (value == "double") o.precision = Precision::f64;
-    else if (value == "float") o.precision = Precision::f32;
-    else return "must be double or float, got '" + std::string(value) + "'";
+    if (value == "double")
+      o.precision = Precision::f64;
+    else if (value == "float")
+      o.precision = Precision::f32;
+    else
+      return "must be double or float, got '" + shown(value) + "'";
     return std::nullopt;
   }
   if (name == "format") {
-    if (value == "png") o.format = ImageFormat::png;
-    else if (value == "ppm") o.format = ImageFormat::ppm;
-    else return "must be png or ppm, got '" + std::string(value) + "'";
+    if (value == "png")
+      o.format = ImageFormat::png;
+    else if (value == "ppm")
+      o.format = ImageFormat::ppm;
+    else
+      return "must be png or ppm, got '" + shown(value) + "'";
     return std::nullopt;
   }
   if (name == "camera") {
@@ -127,7 +142,7 @@ std::optional<std::string> apply_option(RenderOptions& o, std::string_view name,
     std::uint64_t s = 0;
     auto [ptr, ec] = std::from_chars(value.data(), value.data() + value.size(), s);
     if (ec != std::errc() || ptr != value.data() + value.size() || value.empty())
-      return "must be an integer in 0..18446744073709551615, got '" + std::string(value) + "'";
+      return "must be an integer in 0..18446744073709551615, got '" + shown(value) + "'";
     o.seed = s;
     return std::nullopt;
   }
@@ -151,7 +166,7 @@ std::optional<std::string> apply_option(RenderOptions& o, std::string_view name,
     o.background = {parts[0], parts[1], parts[2]};
     return std::nullopt;
   }
-  return "unknown option '" + std::string(name) + "'";
+  return "unknown option '" + shown(name) + "'";
 }
 
 void apply_options(RenderOptions& options, const OptionSet& set, Diagnostics& diags) {
@@ -161,7 +176,7 @@ void apply_options(RenderOptions& options, const OptionSet& set, Diagnostics& di
       for (const OptionSpec& s : kOptions) names.push_back(s.name);
       std::string hint = nearest_word(v.name, names);
       diags.error("unknown-option",
-                  "unknown render option '" + v.name + "'" +
+                  "unknown render option '" + shown(v.name) + "'" +
                       (hint.empty() ? "" : " (did you mean '" + hint + "'?)"),
                   v.where);
       continue;

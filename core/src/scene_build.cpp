@@ -33,23 +33,54 @@ class SceneBuilder {
     for (const EntityDesc& e : desc.entities) {
       check_required(e);
       switch (e.kind) {
-        case EntityKind::camera: add_camera(e, scene); break;
-        case EntityKind::material: break;
-        case EntityKind::light: add_light(e, scene); break;
-        case EntityKind::sphere: add_sphere(e, scene); break;
-        case EntityKind::plane: add_plane(e, scene); break;
+        case EntityKind::camera:
+          add_camera(e, scene);
+          break;
+        case EntityKind::material:
+          break;
+        case EntityKind::light:
+          add_light(e, scene);
+          break;
+        case EntityKind::sphere:
+          add_sphere(e, scene);
+          break;
+        case EntityKind::plane:
+          add_plane(e, scene);
+          break;
       }
     }
     if (scene.cameras.empty() && !had_camera_)
       diags_.error("no-camera", "no camera: a scene needs at least one camera", {});
     RenderOptions scratch;
     apply_options(scratch, desc.render, diags_);
+    check_camera_option(desc.render);
     scene.render = desc.render;
     if (diags_.has_errors()) return std::nullopt;
     return scene;
   }
 
  private:
+  // The scene's own "camera" option must name one of its cameras.
+  void check_camera_option(const OptionSet& render) {
+    const auto& cameras = names_[static_cast<int>(EntityKind::camera)];
+    for (const OptionValue& v : render) {
+      if (v.name != "camera" || v.value.empty() || cameras.count(v.value)) continue;
+      if (!had_camera_ || v.value.size() > 256) continue;  // reported elsewhere
+      std::vector<std::string_view> names;
+      std::string list;
+      for (auto& [name, where] : cameras) {
+        names.push_back(name);
+        list += (list.empty() ? "" : ", ") + name;
+      }
+      std::string hint = nearest_word(v.value, names);
+      diags_.error("unknown-camera",
+                   "render option camera names no camera '" + v.value + "'" +
+                       (hint.empty() ? "" : " (did you mean '" + hint + "'?)") +
+                       (list.empty() ? "; no camera has a name" : "; cameras: " + list),
+                   v.where);
+    }
+  }
+
   void check_required(const EntityDesc& e) {
     for (const AttrSpec& a : entity_spec(e.kind).attrs) {
       if (!a.required || e.find(a.key)) continue;
@@ -111,11 +142,12 @@ class SceneBuilder {
         case ValueKind::positive:
           if (!(v > 0)) fail(i, "must be > 0");
           break;
-        default: break;
+        default:
+          break;
       }
     }
-    if (ok && spec->kind == ValueKind::direction && a->numbers.size() == 3 &&
-        a->numbers[0] == 0 && a->numbers[1] == 0 && a->numbers[2] == 0) {
+    if (ok && spec->kind == ValueKind::direction && a->numbers.size() == 3 && a->numbers[0] == 0 &&
+        a->numbers[1] == 0 && a->numbers[2] == 0) {
       diags_.error("out-of-range", "'" + a->key + "' must not be the zero vector", a->where);
       ok = false;
     }
@@ -134,8 +166,8 @@ class SceneBuilder {
     auto win = values(e, "worlddim");
     auto eye = values(e, "viewpoint");
     if (pix.size() != 2 || win.size() != 2 || eye.size() != 3) return;
-    scene.cameras.push_back({e.name, e.where, static_cast<int>(pix[0]), static_cast<int>(pix[1]), win[0],
-                             win[1], vec3(eye)});
+    scene.cameras.push_back({e.name, e.where, static_cast<int>(pix[0]), static_cast<int>(pix[1]),
+                             win[0], win[1], vec3(eye)});
   }
 
   void add_material(const EntityDesc& e, Scene& scene) {
@@ -172,8 +204,7 @@ class SceneBuilder {
     std::string msg = "undefined material '" + a->word + "' in " + describe_entity(e);
     if (!hint.empty()) msg += " (did you mean '" + hint + "'?)";
     msg += list.empty() ? "; no materials are defined" : "; defined: " + list;
-    diags_.error("undefined-material", msg,
-                 a->value_where.empty() ? a->where : a->value_where[0]);
+    diags_.error("undefined-material", msg, a->value_where.empty() ? a->where : a->value_where[0]);
     return std::nullopt;
   }
 

@@ -13,6 +13,7 @@ namespace rayfarm {
 namespace {
 
 std::string vec(glm::dvec3 v) {
+  v += 0.0;  // -0 (from negating z) prints as 0
   return "<" + format_number(v.x) + ", " + format_number(v.y) + ", " + format_number(v.z) + ">";
 }
 glm::dvec3 pov(glm::dvec3 v) { return {v.x, v.y, -v.z}; }

@@ -1,0 +1,562 @@
+// Converters and lint: model <-> JSON round trips are exact, the POV-Ray export carries the
+// scene, and each lint warning fires for the scene that has the problem and no other.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "rayfarm/json_scene.h"
+#include "rayfarm/lint.h"
+#include "rayfarm/load.h"
+#include "rayfarm/model_parser.h"
+#include "rayfarm/writers.h"
+
+namespace rayfarm {
+namespace {
+
+// /work/shared/scenes/cho.txt, the scene of the lecture notes.
+constexpr std::string_view kLecture =
+    R"(# The scene of the lecture notes: a chrome sphere lit from the top,
+# with two matte spheres and a floor so the reflection has something to show.
+
+camera cam1
+{
+   pixeldim  800 600
+   worlddim  8 6
+   viewpoint 4 3 5
+}
+
+material chrome
+{  ambient  3 3 3
+   diffuse  .1 .1 .1
+   specular .9 .9 .9
+}
+
+material red
+{  ambient  6 1 1
+   diffuse  .8 .1 .1
+   specular 0 0 0
+}
+
+material blue
+{  ambient  1 1 6
+   diffuse  .1 .2 .8
+   specular .2 .2 .2
+   shininess 8
+}
+
+material floor
+{  ambient  2 2 2
+   diffuse  .5 .5 .5
+}
+
+light top
+{  location   2.56 3.80 -1.5
+   emissivity 4 4 4
+}
+
+light side
+{  location   7 5 1
+   emissivity 3 3 3
+}
+
+sphere left
+{  material chrome
+   center   1.25 .75 -4
+   radius   .9
+}
+
+sphere middle
+{  material red
+   center   4 1.2 -5
+   radius   1.2
+}
+
+sphere right
+{  material blue
+   center   6.5 1 -3.5
+   radius   1
+}
+
+plane ground
+{  material floor
+   normal   0 1 0
+   point    0 -0.2 0
+}
+)";
+
+std::string dump(const Diagnostics& diags) {
+  std::string out;
+  for (const Diagnostic& d : diags.items())
+    out += d.where.path + " " + std::to_string(d.where.line) + ":" +
+           std::to_string(d.where.column) + " " + d.code + ": " + d.message + "\n";
+  return out;
+}
+
+SceneDesc model_desc(std::string_view text) {
+  Diagnostics diags;
+  SceneDesc desc = parse_model(text, diags);
+  EXPECT_FALSE(diags.has_errors()) << dump(diags) << "in:\n" << text;
+  return desc;
+}
+
+SceneDesc json_desc(std::string_view text) {
+  Diagnostics diags;
+  SceneDesc desc = parse_json_scene(text, diags);
+  EXPECT_FALSE(diags.has_errors()) << dump(diags) << "in:\n" << text;
+  return desc;
+}
+
+Scene build(const SceneDesc& desc) {
+  Diagnostics diags;
+  std::optional<Scene> scene = build_scene(desc, diags);
+  EXPECT_TRUE(scene.has_value()) << dump(diags);
+  return scene.value_or(Scene{});
+}
+
+bool same_bits(double a, double b) {
+  return std::bit_cast<std::uint64_t>(a) == std::bit_cast<std::uint64_t>(b);
+}
+
+void expect_same_entity(const EntityDesc& a, const EntityDesc& b) {
+  EXPECT_EQ(a.kind, b.kind);
+  EXPECT_EQ(a.name, b.name);
+  ASSERT_EQ(a.attrs.size(), b.attrs.size()) << a.name;
+  for (size_t i = 0; i < a.attrs.size(); ++i) {
+    EXPECT_EQ(a.attrs[i].key, b.attrs[i].key);
+    EXPECT_EQ(a.attrs[i].word, b.attrs[i].word);
+    ASSERT_EQ(a.attrs[i].numbers.size(), b.attrs[i].numbers.size()) << a.attrs[i].key;
+    for (size_t k = 0; k < a.attrs[i].numbers.size(); ++k)
+      EXPECT_TRUE(same_bits(a.attrs[i].numbers[k], b.attrs[i].numbers[k]))
+          << a.name << " " << a.attrs[i].key << "[" << k << "]: " << a.attrs[i].numbers[k] << " vs "
+          << b.attrs[i].numbers[k];
+  }
+}
+
+// Same entities of each kind in the same order (JSON groups entities by kind, so the order
+// across kinds may differ), same attributes, bit-identical numbers.
+void expect_same_desc(const SceneDesc& a, const SceneDesc& b) {
+  for (EntityKind kind : {EntityKind::camera, EntityKind::material, EntityKind::light,
+                          EntityKind::sphere, EntityKind::plane}) {
+    std::vector<const EntityDesc*> as, bs;
+    for (const EntityDesc& e : a.entities)
+      if (e.kind == kind) as.push_back(&e);
+    for (const EntityDesc& e : b.entities)
+      if (e.kind == kind) bs.push_back(&e);
+    ASSERT_EQ(as.size(), bs.size()) << static_cast<int>(kind);
+    for (size_t i = 0; i < as.size(); ++i) expect_same_entity(*as[i], *bs[i]);
+  }
+}
+
+void expect_same_scene(const Scene& a, const Scene& b) {
+  ASSERT_EQ(a.cameras.size(), b.cameras.size());
+  for (size_t i = 0; i < a.cameras.size(); ++i) {
+    EXPECT_EQ(a.cameras[i].name, b.cameras[i].name);
+    EXPECT_EQ(a.cameras[i].width, b.cameras[i].width);
+    EXPECT_EQ(a.cameras[i].height, b.cameras[i].height);
+    EXPECT_EQ(a.cameras[i].world_width, b.cameras[i].world_width);
+    EXPECT_EQ(a.cameras[i].world_height, b.cameras[i].world_height);
+    EXPECT_EQ(a.cameras[i].viewpoint, b.cameras[i].viewpoint);
+  }
+  ASSERT_EQ(a.materials.size(), b.materials.size());
+  for (size_t i = 0; i < a.materials.size(); ++i) {
+    EXPECT_EQ(a.materials[i].name, b.materials[i].name);
+    EXPECT_EQ(a.materials[i].ambient, b.materials[i].ambient);
+    EXPECT_EQ(a.materials[i].diffuse, b.materials[i].diffuse);
+    EXPECT_EQ(a.materials[i].specular, b.materials[i].specular);
+    EXPECT_EQ(a.materials[i].shininess, b.materials[i].shininess);
+  }
+  ASSERT_EQ(a.lights.size(), b.lights.size());
+  for (size_t i = 0; i < a.lights.size(); ++i) {
+    EXPECT_EQ(a.lights[i].name, b.lights[i].name);
+    EXPECT_EQ(a.lights[i].location, b.lights[i].location);
+    EXPECT_EQ(a.lights[i].emissivity, b.lights[i].emissivity);
+  }
+  ASSERT_EQ(a.spheres.size(), b.spheres.size());
+  for (size_t i = 0; i < a.spheres.size(); ++i) {
+    EXPECT_EQ(a.spheres[i].name, b.spheres[i].name);
+    EXPECT_EQ(a.spheres[i].center, b.spheres[i].center);
+    EXPECT_EQ(a.spheres[i].radius, b.spheres[i].radius);
+    EXPECT_EQ(a.spheres[i].material, b.spheres[i].material);
+  }
+  ASSERT_EQ(a.planes.size(), b.planes.size());
+  for (size_t i = 0; i < a.planes.size(); ++i) {
+    EXPECT_EQ(a.planes[i].name, b.planes[i].name);
+    EXPECT_EQ(a.planes[i].normal, b.planes[i].normal);
+    EXPECT_EQ(a.planes[i].point, b.planes[i].point);
+    EXPECT_EQ(a.planes[i].material, b.planes[i].material);
+  }
+}
+
+bool contains(const std::string& text, std::string_view part) {
+  return text.find(part) != std::string::npos;
+}
+
+// --- Model <-> JSON -------------------------------------------------------------------------
+
+TEST(Convert, ModelToJsonToModelGivesTheSameDescriptionAndScene) {
+  SceneDesc original = model_desc(kLecture);
+  SceneDesc via_json = json_desc(write_json(original));
+  SceneDesc back = model_desc(write_model(via_json));
+  expect_same_desc(original, via_json);
+  expect_same_desc(original, back);
+  // The lecture file is grouped by kind, so even the order of entities survives.
+  ASSERT_EQ(back.entities.size(), original.entities.size());
+  for (size_t i = 0; i < back.entities.size(); ++i)
+    EXPECT_EQ(back.entities[i].name, original.entities[i].name);
+  expect_same_scene(build(original), build(back));
+  expect_same_scene(build(original), build(via_json));
+}
+
+TEST(Convert, WritingAModelFileIsAFixedPoint) {
+  std::string once = write_model(model_desc(kLecture));
+  std::string twice = write_model(json_desc(write_json(model_desc(once))));
+  EXPECT_EQ(once, twice);
+  EXPECT_TRUE(contains(once,
+                       "sphere left\n{\n   material chrome\n   center 1.25 0.75 -4\n"
+                       "   radius 0.9\n}\n"))
+      << once;
+}
+
+TEST(Convert, JsonToModelToJsonGivesTheSameJson) {
+  std::string json = write_json(model_desc(kLecture));
+  SceneDesc from_json = json_desc(json);
+  SceneDesc back = model_desc(write_model(from_json));
+  EXPECT_EQ(write_json(back), json);
+  expect_same_desc(from_json, back);
+  expect_same_scene(build(from_json), build(back));
+}
+
+TEST(Convert, KeepsScenesWithInterleavedEntitiesTheSame) {
+  constexpr std::string_view text =
+      "sphere s { material late center 0 0 -5 radius 1 }\n"
+      "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+      "light { location 1 2 3 }\n"
+      "material late { diffuse 0.5 }\n"
+      "plane { material late normal 0 1 0 point 0 -1 0 }\n"
+      "light { location 3 2 1 emissivity 0.5 }\n"
+      "sphere { material late center 1 0 -5 radius 2 }\n";
+  SceneDesc original = model_desc(text);
+  SceneDesc back = model_desc(write_model(json_desc(write_json(original))));
+  expect_same_desc(original, back);
+  expect_same_scene(build(original), build(back));
+}
+
+TEST(Convert, KeepsEveryNumberBitForBit) {
+  const double values[] = {0.1,
+                           1e-300,
+                           123456789.123456789,
+                           -0.0,
+                           4.9e-324,
+                           2.2250738585072014e-308,
+                           1.7976931348623157e308,
+                           0.30000000000000004,
+                           1.0 / 3.0,
+                           -2.5e-7,
+                           9007199254740993.0,
+                           1e16,
+                           123456789012345678.0};
+  for (double v : values) {
+    SCOPED_TRACE(v);
+    std::string text = "camera c { pixeldim 8 6 worlddim 8 6 viewpoint " + format_number(v) + " " +
+                       format_number(-v) + " " + format_number(v) + " }\n";
+    SceneDesc original = model_desc(text);
+    ASSERT_TRUE(same_bits(original.entities[0].attrs[2].numbers[0], v));
+    std::string json = write_json(original);
+    SceneDesc via_json = json_desc(json);
+    SceneDesc back = model_desc(write_model(via_json));
+    expect_same_desc(original, via_json);
+    expect_same_desc(original, back);
+  }
+}
+
+TEST(Convert, KeepsAOneNumberColourAsOneNumber) {
+  SceneDesc original = model_desc("material m { ambient 2 diffuse 0.5 0.25 0 }\n");
+  std::string json = write_json(original);
+  EXPECT_TRUE(contains(json, "\"ambient\": 2,")) << json;
+  std::string model = write_model(json_desc(json));
+  EXPECT_TRUE(contains(model, "   ambient 2\n")) << model;
+  EXPECT_TRUE(contains(model, "   diffuse 0.5 0.25 0\n")) << model;
+}
+
+TEST(Convert, WritesOneUnnamedCameraAsCamera) {
+  std::string json = write_json(model_desc("camera { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }"));
+  EXPECT_TRUE(contains(json, "\"camera\": {")) << json;
+  EXPECT_FALSE(contains(json, "\"cameras\"")) << json;
+}
+
+TEST(Convert, WritesNamedCamerasUnderCamerasInOrder) {
+  SceneDesc original = model_desc(
+      "camera front { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+      "camera back { pixeldim 4 3 worlddim 8 6 viewpoint 4 3 -5 }\n");
+  std::string json = write_json(original);
+  EXPECT_TRUE(contains(json, "\"cameras\": {")) << json;
+  Scene s = build(json_desc(json));
+  ASSERT_EQ(s.cameras.size(), 2u);
+  EXPECT_EQ(s.cameras[0].name, "front");
+  EXPECT_EQ(s.cameras[1].name, "back");
+}
+
+TEST(Convert, GivesUnnamedCamerasNamesThatClashWithNoOther) {
+  SceneDesc original = model_desc(
+      "camera { pixeldim 1 1 worlddim 8 6 viewpoint 0 0 1 }\n"
+      "camera camera1 { pixeldim 2 2 worlddim 8 6 viewpoint 0 0 2 }\n"
+      "camera { pixeldim 3 3 worlddim 8 6 viewpoint 0 0 3 }\n");
+  Scene s = build(json_desc(write_json(original)));
+  ASSERT_EQ(s.cameras.size(), 3u);
+  EXPECT_EQ(s.cameras[0].width, 1);
+  EXPECT_EQ(s.cameras[1].name, "camera1");
+  EXPECT_EQ(s.cameras[1].width, 2);
+  EXPECT_EQ(s.cameras[2].width, 3);
+  EXPECT_NE(s.cameras[0].name, s.cameras[2].name);
+}
+
+TEST(Convert, KeepsRenderOptionsThroughJson) {
+  SceneDesc original = json_desc(R"({"cameras": {
+      "a": {"pixeldim": [8, 6], "worlddim": [8, 6], "viewpoint": [4, 3, 5]},
+      "b": {"pixeldim": [8, 6], "worlddim": [8, 6], "viewpoint": [4, 3, 9]}},
+      "render": {"spp": 16, "seed": 18446744073709551615, "max_dist": 0.1, "shadows": false,
+                 "background": [0.1, 0.2, 0.3], "camera": "b", "highlight": "blinn",
+                 "bailout": 1e-3}})");
+  std::string json = write_json(original);
+  SceneDesc back = json_desc(json);
+  RenderOptions a, b;
+  Diagnostics diags;
+  apply_options(a, original.render, diags);
+  apply_options(b, back.render, diags);
+  EXPECT_FALSE(diags.has_errors()) << dump(diags);
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(b.seed, 18446744073709551615u);
+  EXPECT_EQ(b.camera, "b");
+  EXPECT_EQ(b.max_dist, 0.1);
+  EXPECT_EQ(write_json(back), json);
+}
+
+TEST(Convert, KeepsA64BitSeedExact) {
+  SceneDesc desc;
+  desc.render.push_back({"seed", "12345678901234567", {}});
+  desc.render.push_back({"background", "0.5 0.25 1", {}});
+  SceneDesc back = json_desc(write_json(desc));
+  RenderOptions a, b;
+  Diagnostics diags;
+  apply_options(a, desc.render, diags);
+  apply_options(b, back.render, diags);
+  EXPECT_FALSE(diags.has_errors()) << dump(diags);
+  EXPECT_EQ(b.seed, 12345678901234567u);
+  EXPECT_EQ(a, b);
+}
+
+TEST(Convert, HandlesFiftyThousandMaterialsInLinearTime) {
+  // Once quadratic: ordered_json finds keys by linear search (100,000 materials took 20 s to
+  // read and 11 s to write). Timed against reading the same scene as a model file, so
+  // sanitizers and machine load cancel out.
+  const int n = 50000;
+  std::string text = "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n";
+  for (int i = 0; i < n; ++i)
+    text += "material m" + std::to_string(i) + " { diffuse 1 }\nsphere { material m" +
+            std::to_string(i) + " center 0 0 -5 radius 1 }\n";
+  auto start = std::chrono::steady_clock::now();
+  SceneDesc desc = model_desc(text);
+  auto model_time = std::chrono::steady_clock::now() - start;
+  start = std::chrono::steady_clock::now();
+  SceneDesc back = json_desc(write_json(desc));
+  auto json_time = std::chrono::steady_clock::now() - start;
+  EXPECT_LT(json_time, 10 * model_time + std::chrono::seconds(2));
+  Scene s = build(back);
+  ASSERT_EQ(s.materials.size(), static_cast<size_t>(n));
+  EXPECT_EQ(s.materials[n - 1].name, "m" + std::to_string(n - 1));
+  EXPECT_EQ(s.spheres[n - 1].material, n - 1);
+}
+
+// --- POV-Ray --------------------------------------------------------------------------------
+
+TEST(Convert, ExportsTheCameraToPovWithZNegated) {
+  std::string pov = write_pov(build(model_desc(kLecture)), RenderOptions{});
+  EXPECT_TRUE(contains(pov, "#version 3.7;")) << pov;
+  EXPECT_TRUE(contains(pov,
+                       "camera {\n  perspective\n  location <4, 3, -5>\n"
+                       "  direction <0, 0, 5>\n"))
+      << pov;
+  EXPECT_TRUE(contains(pov, "+W800 +H600")) << pov;
+}
+
+TEST(Convert, ExportsEverySphereLightAndPlaneToPovWithZNegated) {
+  std::string pov = write_pov(build(model_desc(kLecture)), RenderOptions{});
+  EXPECT_TRUE(contains(pov, "sphere { <1.25, 0.75, 4>, 0.9 texture { M0 } }")) << pov;
+  EXPECT_TRUE(contains(pov, "sphere { <4, 1.2, 5>, 1.2 texture { M1 } }")) << pov;
+  EXPECT_TRUE(contains(pov, "sphere { <6.5, 1, 3.5>, 1 texture { M2 } }")) << pov;
+  EXPECT_TRUE(contains(pov, "light_source { <2.56, 3.8, 1.5> color rgb <4, 4, 4>")) << pov;
+  EXPECT_TRUE(contains(pov, "light_source { <7, 5, -1> color rgb <3, 3, 3>")) << pov;
+  EXPECT_TRUE(contains(pov, "plane { <0, 1, 0>, -0.2 texture { M3 } }")) << pov;
+}
+
+TEST(Convert, ExportsTheRecursionDepthAsMaxTraceLevel) {
+  Scene s = build(model_desc(kLecture));
+  EXPECT_TRUE(contains(write_pov(s, RenderOptions{}), "max_trace_level 9 "));
+  RenderOptions shallow;
+  shallow.max_depth = 0;
+  EXPECT_TRUE(contains(write_pov(s, shallow), "max_trace_level 1 "));
+}
+
+TEST(Convert, ExportsReflectionOnlyForSpecularMaterials) {
+  std::string pov = write_pov(build(model_desc(kLecture)), RenderOptions{});
+  auto block = [&](std::string_view name) {
+    size_t at = pov.find(std::string("// ") + std::string(name) + "\n");
+    EXPECT_NE(at, std::string::npos) << name;
+    return pov.substr(at, pov.find("\n}\n", at) - at);
+  };
+  EXPECT_TRUE(contains(block("chrome"), "reflection { <0.9, 0.9, 0.9> }")) << block("chrome");
+  EXPECT_TRUE(contains(block("blue"), "reflection { <0.2, 0.2, 0.2> }")) << block("blue");
+  EXPECT_FALSE(contains(block("red"), "reflection")) << block("red");
+  EXPECT_FALSE(contains(block("floor"), "reflection")) << block("floor");
+}
+
+TEST(Convert, ExportsShadowlessLightsAndTheChosenCamera) {
+  Scene s =
+      build(model_desc("camera a { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+                       "camera b { pixeldim 8 6 worlddim 8 6 viewpoint 1 2 9 }\n"
+                       "light { location 0 0 0 }\n"));
+  RenderOptions options;
+  options.shadows = false;
+  options.camera = "b";
+  std::string pov = write_pov(s, options);
+  EXPECT_TRUE(contains(pov, "location <1, 2, -9>")) << pov;
+  EXPECT_TRUE(contains(pov, " shadowless }")) << pov;
+}
+
+// --- Lint -----------------------------------------------------------------------------------
+
+std::vector<Diagnostic> lint(std::string_view text, RenderOptions options = {}) {
+  LoadedScene loaded = load_scene(text);
+  EXPECT_TRUE(loaded.scene.has_value()) << dump(loaded.diags);
+  Diagnostics diags;
+  if (loaded.scene) lint_scene(*loaded.scene, options, diags);
+  EXPECT_FALSE(diags.has_errors());
+  return diags.items();
+}
+
+std::vector<std::string> codes(const std::vector<Diagnostic>& ds) {
+  std::vector<std::string> out;
+  for (const Diagnostic& d : ds) out.push_back(d.code);
+  return out;
+}
+
+constexpr std::string_view kLitHead =
+    "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+    "material m { diffuse 1 }\n"
+    "light sun { location 4 10 0 }\n";
+
+std::string lit(std::string_view body) { return std::string(kLitHead) + std::string(body); }
+
+TEST(Lint, FindsNothingWrongWithTheLectureScene) {
+  EXPECT_EQ(codes(lint(kLecture)), std::vector<std::string>{});
+}
+
+TEST(Lint, WarnsOfALightInsideASphereAtTheLight) {
+  auto warnings =
+      lint(lit("sphere ball { material m center 4 3 -5 radius 2 }\n"
+               "light bulb { location 4 3.5 -5 }\n"));
+  ASSERT_EQ(codes(warnings), std::vector<std::string>{"light-inside-sphere"});
+  EXPECT_EQ(warnings[0].severity, Severity::warning);
+  EXPECT_EQ(warnings[0].where.line, 5);
+  EXPECT_EQ(warnings[0].message,
+            "light 'bulb' is inside sphere 'ball': it lights only that "
+            "sphere's inside");
+}
+
+TEST(Lint, WarnsOfTheEyeInsideASphere) {
+  auto warnings = lint(lit("sphere dome { material m center 4 3 4 radius 3 }\n"));
+  ASSERT_EQ(codes(warnings), std::vector<std::string>{"eye-inside-sphere"});
+  EXPECT_EQ(warnings[0].where.line, 4);
+  EXPECT_EQ(warnings[0].message, "the eye of camera 'c' is inside sphere 'dome'");
+}
+
+TEST(Lint, WarnsOfAnObjectBehindTheEye) {
+  auto warnings =
+      lint(lit("sphere front { material m center 4 3 -5 radius 1 }\n"
+               "sphere back { material m center 4 3 10 radius 1 }\n"));
+  ASSERT_EQ(codes(warnings), std::vector<std::string>{"behind-eye"});
+  EXPECT_EQ(warnings[0].where.line, 5);
+  EXPECT_EQ(warnings[0].message,
+            "sphere 'back' is behind the eye of camera 'c' and cannot be seen directly");
+}
+
+TEST(Lint, DoesNotCallASphereThatReachesPastTheEyeBehindIt) {
+  EXPECT_EQ(codes(lint(lit("sphere big { material m center 4 6 6 radius 3 }\n"))),
+            std::vector<std::string>{});
+}
+
+TEST(Lint, WarnsOfAnUnusedMaterialAtItsDefinition) {
+  auto warnings =
+      lint(lit("material gold { specular 1 }\n"
+               "sphere s { material m center 4 3 -5 radius 1 }\n"));
+  ASSERT_EQ(codes(warnings), std::vector<std::string>{"unused-material"});
+  EXPECT_EQ(warnings[0].where.line, 4);
+  EXPECT_EQ(warnings[0].message, "material 'gold' is never used");
+}
+
+TEST(Lint, WarnsThatNothingIsLitWithoutLightsOrAmbient) {
+  auto warnings = lint(
+      "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+      "material m { diffuse 1 specular 1 }\n"
+      "sphere s { material m center 4 3 -5 radius 1 }\n");
+  ASSERT_EQ(codes(warnings), std::vector<std::string>{"black-image"});
+  EXPECT_EQ(warnings[0].message,
+            "nothing is lit: there are no lights and no ambient colour, "
+            "the image is entirely black");
+}
+
+TEST(Lint, WarnsThatNothingIsLitWhenEveryLightIsBlack) {
+  auto warnings = lint(
+      "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+      "material m { diffuse 1 }\n"
+      "light { location 0 9 0 emissivity 0 }\n"
+      "sphere s { material m center 4 3 -5 radius 1 }\n");
+  ASSERT_EQ(codes(warnings), std::vector<std::string>{"black-image"});
+  EXPECT_TRUE(contains(warnings[0].message, "every light has zero emissivity"));
+}
+
+TEST(Lint, DoesNotWarnOfDarknessWhenAmbientOrBackgroundShows) {
+  constexpr std::string_view unlit_ambient =
+      "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+      "material m { ambient 1 }\n"
+      "sphere s { material m center 4 3 -5 radius 1 }\n";
+  EXPECT_EQ(codes(lint(unlit_ambient)), std::vector<std::string>{});
+  constexpr std::string_view unlit =
+      "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+      "material m { diffuse 1 }\n"
+      "sphere s { material m center 4 3 -5 radius 1 }\n";
+  RenderOptions grey;
+  grey.background = {0.5, 0.5, 0.5};
+  EXPECT_EQ(codes(lint(unlit, grey)), std::vector<std::string>{});
+}
+
+TEST(Lint, WarnsOfAnEmptyScene) {
+  auto warnings = lint("camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n");
+  ASSERT_EQ(codes(warnings), std::vector<std::string>{"black-image"});
+  EXPECT_TRUE(contains(warnings[0].message, "no objects"));
+}
+
+TEST(Lint, WarnsOfACameraOptionNamingNoCamera) {
+  RenderOptions options;
+  options.camera = "side";
+  EXPECT_EQ(codes(lint(kLecture, options)), std::vector<std::string>{"unknown-camera"});
+}
+
+TEST(Lint, ChecksTheChosenCamera) {
+  std::string text =
+      lit("camera inside { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 -5 }\n"
+          "sphere s { material m center 4 3 -5 radius 1 }\n");
+  EXPECT_EQ(codes(lint(text)), std::vector<std::string>{});
+  RenderOptions options;
+  options.camera = "inside";
+  EXPECT_EQ(codes(lint(text, options)), std::vector<std::string>{"eye-inside-sphere"});
+}
+
+}  // namespace
+}  // namespace rayfarm
