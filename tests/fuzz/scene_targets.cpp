@@ -1,0 +1,91 @@
+// Fuzz targets for the scene front end.
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "rayfarm/json_scene.h"
+#include "rayfarm/lint.h"
+#include "rayfarm/load.h"
+#include "rayfarm/model_parser.h"
+#include "rayfarm/render.h"
+#include "rayfarm/writers.h"
+#include "targets.h"
+
+namespace rayfarm::fuzz {
+namespace {
+
+void check(bool ok, const char* what) {
+  if (!ok) {
+    std::fprintf(stderr, "fuzz property violated: %s\n", what);
+    std::abort();
+  }
+}
+
+bool same_scene(const Scene& a, const Scene& b) {
+  if (a.cameras.size() != b.cameras.size() || a.materials.size() != b.materials.size() ||
+      a.lights.size() != b.lights.size() || a.spheres.size() != b.spheres.size() ||
+      a.planes.size() != b.planes.size())
+    return false;
+  for (size_t i = 0; i < a.spheres.size(); ++i)
+    if (a.spheres[i].center != b.spheres[i].center || a.spheres[i].radius != b.spheres[i].radius ||
+        a.spheres[i].material != b.spheres[i].material)
+      return false;
+  for (size_t i = 0; i < a.materials.size(); ++i)
+    if (a.materials[i].ambient != b.materials[i].ambient ||
+        a.materials[i].shininess != b.materials[i].shininess)
+      return false;
+  return true;
+}
+
+// A render small enough to run for every input.
+void tiny_render(const Scene& scene) {
+  RenderOptions o;
+  Diagnostics ignored;
+  apply_options(o, scene.render, ignored);
+  o.width = 4;
+  o.height = 3;
+  o.spp = o.spp > 2 ? 2 : o.spp;
+  o.max_depth = o.max_depth > 3 ? 3 : o.max_depth;
+  o.time_limit = 0;
+  std::string error;
+  Image img = render_image(scene, o, 1, nullptr, {}, nullptr, &error);
+  check(!error.empty() || img.rgb.size() == 4 * 3 * 3, "render size");
+}
+
+}  // namespace
+
+int model_parser(const std::uint8_t* data, std::size_t size) {
+  std::string text(reinterpret_cast<const char*>(data), size);
+  Diagnostics diags;
+  SceneDesc desc = parse_model(text, diags);
+  std::optional<Scene> scene;
+  if (!diags.has_errors()) scene = build_scene(desc, diags);
+  for (const Diagnostic& d : diags.items()) (void)format_diagnostic(d, "fuzz", text);
+  check(diags.has_errors() || scene.has_value(), "no errors but no scene");
+  if (!scene) return 0;
+  Diagnostics lints;
+  lint_scene(*scene, RenderOptions{}, lints);
+  // Round trips: model -> model and model -> JSON give the same scene.
+  for (const std::string& again : {write_model(desc), write_json(desc)}) {
+    LoadedScene reloaded = load_scene(again);
+    check(reloaded.scene.has_value(), "a written scene does not load");
+    check(same_scene(*scene, *reloaded.scene), "round trip changed the scene");
+  }
+  if (scene->spheres.size() + scene->planes.size() < 64) tiny_render(*scene);
+  return 0;
+}
+
+int json_scene(const std::uint8_t* data, std::size_t size) {
+  std::string text(reinterpret_cast<const char*>(data), size);
+  Diagnostics diags;
+  SceneDesc desc = parse_json_scene(text, diags);
+  std::optional<Scene> scene;
+  if (!diags.has_errors()) scene = build_scene(desc, diags);
+  check(diags.has_errors() || scene.has_value(), "no errors but no scene");
+  if (!scene) return 0;
+  (void)write_pov(*scene, RenderOptions{});
+  if (scene->spheres.size() + scene->planes.size() < 64) tiny_render(*scene);
+  return 0;
+}
+
+}  // namespace rayfarm::fuzz
