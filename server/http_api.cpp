@@ -368,8 +368,13 @@ void HttpApi::routes() {
         // Shutting down: the job is persisted and the client can poll for it.
       }
     }
+    JobState state;
+    {
+      std::lock_guard lock(job.mu);  // a worker may be starting it
+      state = job.state;
+    }
     Json body = {{"id", job.id},
-                 {"state", to_string(job.state)},
+                 {"state", to_string(state)},
                  {"queue_position", svc.queue_position(job)},
                  {"links",
                   {{"self", "/jobs/" + job.id},

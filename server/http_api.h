@@ -1,14 +1,16 @@
 // The HTTP API of SPEC §5 on cpp-httplib, with the library's known weaknesses closed here:
-// chunked and compressed uploads refused (they bypass the payload limit), multi-range
-// requests refused, exceptions answered with a generic JSON 500, the client address taken
-// from the socket only, path length bounded, and a connection pool sized so that waiting
-// clients cannot starve health and status requests.
+// chunked and compressed uploads refused (they bypass the payload limit), also before a
+// `100 Continue`, multi-range requests refused, exceptions answered with a generic JSON 500,
+// the client address taken from the socket only, path length bounded, and a connection pool
+// sized so that waiting clients cannot starve health and status requests. The request head
+// limits and the connection loop are in connection.h.
 #pragma once
 
 #include <httplib.h>
 
 #include <memory>
 
+#include "connection.h"
 #include "service.h"
 
 namespace rayfarm::server {
@@ -27,9 +29,11 @@ class HttpApi {
  private:
   void routes();
   void harden();
+  // Answers a request that must not be served before its body is read; true when refused.
+  bool refuse(const httplib::Request& req, httplib::Response& res) const;
 
   Service& service_;
-  httplib::Server server_;
+  GuardedServer server_;
 };
 
 // The route a path belongs to, for metrics and logs: "/jobs/:id/image", ...

@@ -2,6 +2,7 @@
 #include "job.h"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 
 namespace rayfarm::server {
@@ -44,7 +45,21 @@ nlohmann::json iso_or_null(long long ms) {
   return std::string(out);
 }
 
+// How much of the image was rendered. A canceled or failed render is "finished" too, but
+// only a done job is complete.
+double rendered_fraction(const Job& job) {
+  if (job.state == JobState::done) return 1.0;
+  const RenderStats& st = job.stats;
+  if (st.tiles_per_pass == 0 || st.spp_target == 0) return 0.0;
+  double f = (st.spp_done + static_cast<double>(st.tiles_done) / st.tiles_per_pass) / st.spp_target;
+  return std::min(f, 1.0);
+}
+
 }  // namespace
+
+std::string json_text(const nlohmann::json& j) {
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 nlohmann::json job_status(const Job& job, int queue_position) {
   std::lock_guard lock(job.mu);
@@ -52,14 +67,14 @@ nlohmann::json job_status(const Job& job, int queue_position) {
   nlohmann::json j;
   j["id"] = job.id;
   j["state"] = to_string(job.state);
-  j["progress"] = job.state == JobState::done ? 1.0 : st.progress();
+  const double progress = rendered_fraction(job);
+  j["progress"] = progress;
   j["queue_position"] = queue_position;
   j["created_at"] = iso_or_null(job.created_ms);
   j["started_at"] = iso_or_null(job.started_ms);
   j["finished_at"] = iso_or_null(job.finished_ms);
   long long end = job.finished_ms > 0 ? job.finished_ms : now_ms();
   j["elapsed_ms"] = job.started_ms > 0 ? end - job.started_ms : 0;
-  double progress = st.progress();
   if (job.state == JobState::running && progress > 0.01 && st.render_ms > 0)
     j["eta_ms"] = std::llround(st.render_ms * (1 - progress) / progress);
   else

@@ -59,6 +59,10 @@ struct Job {
   std::uint64_t sequence = 0;  // submission order, for queue positions
 };
 
+// JSON text that never throws: user input that is not UTF-8 (a camera name in a query, a
+// byte in a scene quoted by an error message) comes out as U+FFFD.
+std::string json_text(const nlohmann::json& j);
+
 // The status document of GET /jobs/ID (SPEC §5). `queue_position` from the scheduler.
 nlohmann::json job_status(const Job& job, int queue_position);
 

@@ -206,6 +206,8 @@ void Scheduler::work() {
       std::lock_guard jl(p->job->mu);
       render = p->job->render;
     }
+    // Another worker finished the job between pick() and here (the render is dropped then).
+    if (!render) continue;
     RenderJob::Step step;
     try {
       step = render->run_step();

@@ -311,7 +311,9 @@ void Service::on_finished(Job& job, RenderJob* render) {
       state = JobState::failed;
       code = job.error_code;
       message = job.error;
-    } else if (render->canceled()) {
+    } else if (st.stop_reason == "canceled") {
+      // Stopped by its client, or interrupted by a shutdown (a cancel that came after the
+      // last tile does not discard a complete image).
       state = job.cancel_requested ? JobState::canceled : JobState::queued;
     } else {
       state = JobState::done;
@@ -460,7 +462,16 @@ void Service::shutdown() {
   scheduler_->drain(std::chrono::milliseconds(static_cast<long>(settings_.shutdown_grace * 1000)));
   scheduler_->stop();
   stopped_ = true;
-  for (auto& [id, j] : jobs_) j->changed.notify_all();
+  std::vector<std::shared_ptr<Job>> jobs;
+  {
+    std::lock_guard lock(mu_);
+    for (auto& [id, j] : jobs_) jobs.push_back(j);
+  }
+  // Waiting requests and event streams wake up and see stopped().
+  for (auto& j : jobs) {
+    { std::lock_guard jl(j->mu); }
+    j->changed.notify_all();
+  }
 }
 
 void Service::expire() {

@@ -44,6 +44,8 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   add("--samples-dir", s.samples_dir, "directory of bundled sample scenes");
   add("--shutdown-grace", s.shutdown_grace, "seconds running renders may finish on SIGTERM")
       ->check(CLI::Range(0.0, 3600.0));
+  add("--header-timeout", s.header_timeout, "seconds a client has to send a request's head")
+      ->check(CLI::Range(0.1, 3600.0));
   bool quiet = false;
   app.add_flag("--no-access-log", quiet, "do not log each request")->envname("RAYFARM_NO_ACCESS_LOG");
   try {

@@ -33,6 +33,7 @@ struct Settings {
   std::uint64_t results_max_bytes = 2ULL << 30;
   std::string samples_dir;
   double shutdown_grace = 10;  // seconds running renders may finish after SIGTERM
+  double header_timeout = 10;  // seconds a client has to send a request line and headers
   bool access_log = true;
 };
 

@@ -86,7 +86,7 @@ void ResultStore::save_scene(const std::string& id, const std::string& text) {
 
 void ResultStore::save_record(const Job& job) {
   if (enabled() && safe_name(job.id))
-    write_atomically(dir_ / "jobs" / (job.id + ".json"), job_record(job).dump());
+    write_atomically(dir_ / "jobs" / (job.id + ".json"), json_text(job_record(job)));
 }
 
 void ResultStore::save_image(const std::string& name, const std::string& png) {

@@ -1,0 +1,193 @@
+// The connection loop and socket stream of GuardedServer.
+#include "connection.h"
+
+#include <netdb.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+
+namespace rayfarm::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct ConnectionState {
+  bool head_complete = false;
+  bool close_after = false;
+  std::size_t head_bytes = 0;
+  Clock::time_point head_deadline{};
+};
+
+thread_local ConnectionState* current = nullptr;
+
+int poll_for(int fd, short events, int timeout_ms) {
+  pollfd p{fd, events, 0};
+  for (;;) {
+    int r = ::poll(&p, 1, timeout_ms);
+    if (r >= 0 || errno != EINTR) return r;
+  }
+}
+
+int ms_until(Clock::time_point t) {
+  auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(t - Clock::now()).count();
+  return static_cast<int>(std::clamp<long long>(ms, 0, 1 << 30));
+}
+
+void address_of(int fd, bool peer, std::string& ip, int& port) {
+  sockaddr_storage addr{};
+  socklen_t len = sizeof addr;
+  int r = peer ? ::getpeername(fd, reinterpret_cast<sockaddr*>(&addr), &len)
+               : ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  if (r != 0) return;
+  char host[NI_MAXHOST], serv[NI_MAXSERV];
+  if (::getnameinfo(reinterpret_cast<sockaddr*>(&addr), len, host, sizeof host, serv, sizeof serv,
+                    NI_NUMERICHOST | NI_NUMERICSERV) == 0) {
+    ip = host;
+    port = std::atoi(serv);
+  }
+}
+
+// A connected socket with a small read buffer (the library reads the head a byte at a time).
+// While the head of a request is incomplete, reads stop at its byte and time limits.
+class SocketStream final : public httplib::Stream {
+ public:
+  SocketStream(int fd, ConnectionState& state, const ConnectionLimits& limits, int read_timeout_ms,
+               int write_timeout_ms)
+      : fd_(fd),
+        state_(state),
+        limits_(limits),
+        read_timeout_ms_(read_timeout_ms),
+        write_timeout_ms_(write_timeout_ms) {}
+
+  bool buffered() const { return pos_ < len_; }
+
+  bool is_readable() const override {
+    return buffered() || poll_for(fd_, POLLIN, read_timeout_ms_) > 0;
+  }
+
+  // Writable and the peer still there (a departed event-stream client is noticed here).
+  bool is_writable() const override {
+    if (poll_for(fd_, POLLOUT, write_timeout_ms_) <= 0) return false;
+    if (poll_for(fd_, POLLIN, 0) <= 0) return true;
+    char c;
+    ssize_t n = ::recv(fd_, &c, 1, MSG_PEEK | MSG_DONTWAIT);
+    return n > 0 || (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK));
+  }
+
+  ssize_t read(char* ptr, size_t size) override {
+    if (size == 0) return 0;
+    if (!buffered()) {
+      int timeout = read_timeout_ms_;
+      if (!state_.head_complete) {
+        if (state_.head_bytes >= limits_.max_head_bytes) return -1;
+        timeout = std::min(timeout, ms_until(state_.head_deadline));
+        if (timeout == 0) return -1;
+      }
+      if (poll_for(fd_, POLLIN, timeout) <= 0) return -1;
+      ssize_t n;
+      do n = ::recv(fd_, buf_, sizeof buf_, 0);
+      while (n < 0 && errno == EINTR);
+      if (n <= 0) return n;
+      pos_ = 0;
+      len_ = static_cast<size_t>(n);
+    }
+    size_t n = std::min(size, len_ - pos_);
+    std::memcpy(ptr, buf_ + pos_, n);
+    pos_ += n;
+    if (!state_.head_complete) state_.head_bytes += n;
+    return static_cast<ssize_t>(n);
+  }
+
+  ssize_t write(const char* ptr, size_t size) override {
+    if (poll_for(fd_, POLLOUT, write_timeout_ms_) <= 0) return -1;
+    ssize_t n;
+    do n = ::send(fd_, ptr, size, MSG_NOSIGNAL);
+    while (n < 0 && errno == EINTR);
+    return n;
+  }
+
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    address_of(fd_, true, ip, port);
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    address_of(fd_, false, ip, port);
+  }
+  socket_t socket() const override { return fd_; }
+
+ private:
+  int fd_;
+  ConnectionState& state_;
+  const ConnectionLimits& limits_;
+  int read_timeout_ms_;
+  int write_timeout_ms_;
+  char buf_[4096];
+  size_t pos_ = 0, len_ = 0;
+};
+
+// Sends FIN after the answer, then reads and drops what the client still sends, briefly, so
+// that closing with unread data (which sends a reset) cannot destroy the answer in flight.
+void lingering_close(int fd) {
+  ::shutdown(fd, SHUT_WR);
+  const auto deadline = Clock::now() + std::chrono::milliseconds(500);
+  std::size_t dropped = 0;
+  char buf[16384];
+  while (dropped < (1u << 20) && poll_for(fd, POLLIN, ms_until(deadline)) > 0) {
+    ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n <= 0) break;
+    dropped += static_cast<size_t>(n);
+  }
+}
+
+}  // namespace
+
+void GuardedServer::head_complete() {
+  if (current) current->head_complete = true;
+}
+
+void GuardedServer::close_after(httplib::Response& res) {
+  if (current) current->close_after = true;
+  res.set_header("Connection", "close");
+}
+
+bool GuardedServer::process_and_close_socket(socket_t sock) {
+  ConnectionState state;
+  current = &state;
+  auto ms = [](time_t sec, time_t usec) { return static_cast<int>(sec * 1000 + usec / 1000); };
+  SocketStream strm(sock, state, limits_, ms(read_timeout_sec_, read_timeout_usec_),
+                    ms(write_timeout_sec_, write_timeout_usec_));
+  // The next request: already buffered, or arriving within the keep-alive timeout. Polled in
+  // short steps so that stop() does not wait for idle connections.
+  auto next_request = [&] {
+    if (strm.buffered()) return true;
+    const auto deadline = Clock::now() + std::chrono::seconds(keep_alive_timeout_sec_);
+    while (svr_sock_ != INVALID_SOCKET) {
+      int r = poll_for(sock, POLLIN, std::min(50, ms_until(deadline)));
+      if (r != 0) return r > 0;
+      if (Clock::now() >= deadline) return false;
+    }
+    return false;
+  };
+  bool ret = false;
+  for (size_t left = keep_alive_max_count_; left > 0 && svr_sock_ != INVALID_SOCKET; --left) {
+    if (!next_request()) break;
+    state = ConnectionState{};
+    state.head_deadline = Clock::now() + limits_.head_timeout;
+    bool connection_closed = false;
+    ret = process_request(strm, left == 1, connection_closed, nullptr);
+    // A head the library refused itself (bad request line, headers, range) never reached
+    // the handlers; whatever follows it is not trusted either.
+    if (!ret || connection_closed || state.close_after || !state.head_complete) break;
+  }
+  current = nullptr;
+  if (state.close_after) lingering_close(sock);
+  ::shutdown(sock, SHUT_RDWR);
+  ::close(sock);
+  return ret;
+}
+
+}  // namespace rayfarm::server

@@ -1,0 +1,40 @@
+// rayfarmd's HTTP connections: cpp-httplib's server with its connection loop replaced, because
+// 0.11.4's reads a request line and headers of any length for as long as a client trickles
+// them, and keeps a connection open after a request whose body it never read (the body is
+// then parsed as further requests). Here the request head is bounded in bytes and in time, a
+// handler that refuses a request before its body marks the connection to close after the
+// answer (with a short lingering close so the answer is not lost to a reset), and idle
+// keep-alive connections end as soon as the server stops.
+#pragma once
+
+#include <httplib.h>
+
+#include <chrono>
+#include <cstddef>
+
+namespace rayfarm::server {
+
+struct ConnectionLimits {
+  std::size_t max_head_bytes = 64 * 1024;        // request line and headers together
+  std::chrono::milliseconds head_timeout{10000};  // to receive them, from the first byte
+};
+
+class GuardedServer : public httplib::Server {
+ public:
+  explicit GuardedServer(ConnectionLimits limits) : limits_(limits) {}
+
+  // For handlers on the connection's thread. The request head has been read: the head limits
+  // no longer apply (the body has its own, the payload limit). Call it from the pre-routing
+  // and expect-100 handlers: a request that never reaches them (one the library refused
+  // itself) ends its connection.
+  static void head_complete();
+  // This answer is sent without reading the request's body: the connection ends after it.
+  static void close_after(httplib::Response& res);
+
+ private:
+  bool process_and_close_socket(socket_t sock) override;
+
+  ConnectionLimits limits_;
+};
+
+}  // namespace rayfarm::server

@@ -1,0 +1,1515 @@
+// rayfarmd in-process: the real Service and HttpApi on a free loopback port, driven by
+// httplib::Client for the API of SPEC §5 and by raw socket bytes for the cpp-httplib 0.11.4
+// weaknesses the server closes (NOTES.md), so each stays closed.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <httplib.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "http_api.h"
+#include "rayfarm/compare.h"
+#include "rayfarm/image_io.h"
+#include "rayfarm/load.h"
+#include "rayfarm/render.h"
+#include "service.h"
+
+namespace rayfarm::server {
+namespace {
+
+using Json = nlohmann::json;
+using Clock = std::chrono::steady_clock;
+using namespace std::chrono_literals;
+
+// A write to a socket the server has closed must fail, not kill the test process.
+const bool kSigpipeIgnored = [] {
+  std::signal(SIGPIPE, SIG_IGN);
+  return true;
+}();
+
+// The lecture scene, small: one mirror sphere, a floor, one light.
+constexpr const char* kScene = R"(# a small test scene
+camera cam1
+{
+   pixeldim  40 30
+   worlddim  8 6
+   viewpoint 4 3 5
+}
+material chrome
+{  ambient  3 3 3
+   diffuse  .1 .1 .1
+   specular .9 .9 .9
+}
+material floor
+{  ambient  2 2 2
+   diffuse  .5 .5 .5
+}
+light top
+{  location   2.56 3.80 -1.5
+   emissivity 4 4 4
+}
+sphere left
+{  material chrome
+   center   1.25 .75 -4
+   radius   .9
+}
+plane ground
+{  material floor
+   normal   0 1 0
+   point    0 -0.2 0
+}
+)";
+
+// The same scene as JSON (its twin: same names, same values).
+std::string scene_json() {
+  return R"({
+  "cameras":   {"cam1": {"pixeldim": [40, 30], "worlddim": [8, 6], "viewpoint": [4, 3, 5]}},
+  "materials": {"chrome": {"ambient": [3, 3, 3], "diffuse": [0.1, 0.1, 0.1],
+                           "specular": [0.9, 0.9, 0.9]},
+                "floor":  {"ambient": [2, 2, 2], "diffuse": [0.5, 0.5, 0.5]}},
+  "lights":    [{"name": "top", "location": [2.56, 3.8, -1.5], "emissivity": [4, 4, 4]}],
+  "objects":   [{"type": "sphere", "name": "left", "material": "chrome",
+                 "center": [1.25, 0.75, -4], "radius": 0.9},
+                {"type": "plane", "name": "ground", "material": "floor",
+                 "normal": [0, 1, 0], "point": [0, -0.2, 0]}]
+})";
+}
+
+// Runs about a minute on two workers: for tests that need a job in flight (always canceled).
+constexpr const char* kLong = "width=800&height=600&spp=1024";
+
+Settings test_settings() {
+  Settings s;
+  s.workers = 2;
+  s.http_threads = 16;
+  s.samples_dir = RAYFARM_SOURCE_DIR "/scenes";
+  s.access_log = false;
+  s.shutdown_grace = 0;
+  return s;
+}
+
+// The server on 127.0.0.1:<free port>, listening on its own thread until stop().
+class TestServer {
+ public:
+  explicit TestServer(Settings settings = test_settings(),
+                      const std::function<void(httplib::Server&)>& extra_routes = {}) {
+    service_ = std::make_unique<Service>(std::move(settings));
+    api_ = std::make_unique<HttpApi>(*service_);
+    if (extra_routes) extra_routes(api_->http());
+    port_ = api_->bind("127.0.0.1", 0);
+    if (port_ <= 0) throw std::runtime_error("cannot bind a loopback port");
+    thread_ = std::thread([this] { api_->listen(); });
+    auto deadline = Clock::now() + 5s;
+    while (!api_->http().is_running() && Clock::now() < deadline) std::this_thread::sleep_for(1ms);
+    if (!api_->http().is_running()) throw std::runtime_error("the server did not start");
+  }
+  TestServer(const TestServer&) = delete;
+  ~TestServer() { stop(); }
+
+  void stop() {
+    if (!api_) return;
+    service_->shutdown();
+    api_->stop();
+    thread_.join();
+    api_.reset();
+    service_.reset();
+  }
+
+  int port() const { return port_; }
+  Service& service() { return *service_; }
+
+  std::unique_ptr<httplib::Client> client(const std::string& token = "") const {
+    auto c = std::make_unique<httplib::Client>("127.0.0.1", port_);
+    c->set_connection_timeout(5);
+    c->set_read_timeout(60);
+    c->set_write_timeout(10);
+    if (!token.empty()) c->set_bearer_token_auth(token);
+    return c;
+  }
+
+ private:
+  std::unique_ptr<Service> service_;
+  std::unique_ptr<HttpApi> api_;
+  std::thread thread_;
+  int port_ = 0;
+};
+
+int code_of(const httplib::Result& r) { return r ? r->status : -1; }
+
+Json json_of(const httplib::Result& r) {
+  if (!r) return Json();
+  return Json::parse(r->body, nullptr, false);
+}
+
+std::string query(const std::string& path, const std::string& q) {
+  return q.empty() ? path : path + "?" + q;
+}
+
+// Submits and returns the new job's id (empty, with a failure, when not accepted).
+std::string submit(httplib::Client& c, const std::string& q = "", const std::string& body = kScene) {
+  auto r = c.Post(query("/render", q), body, "text/plain");
+  EXPECT_TRUE(r);
+  if (!r) return {};
+  EXPECT_EQ(r->status, 202) << r->body;
+  return json_of(r).value("id", "");
+}
+
+Json status_of(httplib::Client& c, const std::string& id) {
+  auto r = c.Get("/jobs/" + id);
+  EXPECT_TRUE(r && r->status == 200);
+  return json_of(r);
+}
+
+// Polls the job until `done(status)` or the timeout; returns the last status.
+Json wait_for(httplib::Client& c, const std::string& id, const std::function<bool(const Json&)>& done,
+              std::chrono::milliseconds timeout = 60s) {
+  auto deadline = Clock::now() + timeout;
+  Json st;
+  for (;;) {
+    st = status_of(c, id);
+    if (st.is_discarded() || st.is_null() || done(st) || Clock::now() >= deadline) return st;
+    std::this_thread::sleep_for(5ms);
+  }
+}
+
+bool is_final_state(const Json& st) {
+  std::string s = st.value("state", "");
+  return s == "done" || s == "failed" || s == "canceled";
+}
+
+Json wait_final(httplib::Client& c, const std::string& id, std::chrono::milliseconds timeout = 60s) {
+  return wait_for(c, id, is_final_state, timeout);
+}
+
+Json wait_running(httplib::Client& c, const std::string& id) {
+  return wait_for(c, id, [](const Json& st) { return st.value("state", "") != "queued"; }, 30s);
+}
+
+Scene load_or_fail(const std::string& text) {
+  LoadedScene loaded = load_scene(text);
+  EXPECT_TRUE(loaded.scene.has_value());
+  return loaded.scene ? *loaded.scene : Scene{};
+}
+
+// What `rayfarm render` writes for this scene and these options: the reference bytes.
+std::string local_render(const std::string& text, const std::vector<std::pair<std::string, std::string>>& opts,
+                         ImageFormat format = ImageFormat::png) {
+  Scene scene = load_or_fail(text);
+  RenderOptions options;
+  for (auto& [k, v] : opts) EXPECT_EQ(apply_option(options, k, v), std::nullopt) << k;
+  std::string error;
+  Image image = render_image(scene, options, 2, nullptr, {}, nullptr, &error);
+  EXPECT_EQ(error, "");
+  auto bytes = encode_image(image, format);
+  return std::string(bytes.begin(), bytes.end());
+}
+
+Image decode_or_fail(const std::string& bytes) {
+  std::string error;
+  auto image = decode_image(bytes, &error);
+  EXPECT_TRUE(image.has_value()) << error;
+  return image ? *image : Image{};
+}
+
+std::string png_bytes(const Image& image) {
+  auto bytes = encode_png(image);
+  return std::string(bytes.begin(), bytes.end());
+}
+
+Json error_of(const httplib::Result& r) {
+  Json j = json_of(r);
+  return j.is_object() && j.contains("error") ? j["error"] : Json();
+}
+
+// ---- A raw HTTP/1.1 connection: exactly the bytes a test writes --------------------------
+
+struct RawResponse {
+  int status = 0;
+  std::multimap<std::string, std::string> headers;  // names lower-cased
+  std::string body;
+  bool has(const std::string& name) const { return headers.count(name) > 0; }
+  std::string header(const std::string& name) const {
+    auto it = headers.find(name);
+    return it == headers.end() ? "" : it->second;
+  }
+};
+
+class RawConnection {
+ public:
+  explicit RawConnection(int port) {
+    fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<std::uint16_t>(port));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (fd_ < 0 || ::connect(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0)
+      throw std::runtime_error("cannot connect");
+  }
+  RawConnection(const RawConnection&) = delete;
+  ~RawConnection() { ::close(fd_); }
+
+  // Writes all bytes or fails (peer closed, reset, or no progress for `timeout`).
+  bool send(std::string_view bytes, std::chrono::milliseconds timeout = 2s) {
+    size_t done = 0;
+    while (done < bytes.size()) {
+      pollfd p{fd_, POLLOUT, 0};
+      if (::poll(&p, 1, static_cast<int>(timeout.count())) <= 0) return false;
+      ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return false;
+      done += static_cast<size_t>(n);
+    }
+    return true;
+  }
+
+  // One response: status line, headers, and a Content-Length body. nullopt on EOF, reset or
+  // timeout before a whole response arrived.
+  std::optional<RawResponse> read_response(std::chrono::milliseconds timeout = 5s) {
+    auto deadline = Clock::now() + timeout;
+    size_t end;
+    while ((end = buffer_.find("\r\n\r\n")) == std::string::npos)
+      if (!fill(deadline)) return std::nullopt;
+    RawResponse res;
+    std::string head = buffer_.substr(0, end + 2);
+    buffer_.erase(0, end + 4);
+    size_t eol = head.find("\r\n");
+    std::string status_line = head.substr(0, eol);
+    if (status_line.rfind("HTTP/1.", 0) != 0 || status_line.size() < 12) return std::nullopt;
+    res.status = std::atoi(status_line.c_str() + 9);
+    for (size_t pos = eol + 2; pos < head.size();) {
+      size_t next = head.find("\r\n", pos);
+      std::string line = head.substr(pos, next - pos);
+      pos = next + 2;
+      size_t colon = line.find(':');
+      if (colon == std::string::npos) continue;
+      std::string name = line.substr(0, colon);
+      for (char& ch : name) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      std::string value = line.substr(colon + 1);
+      while (!value.empty() && value.front() == ' ') value.erase(0, 1);
+      res.headers.emplace(name, value);
+    }
+    size_t length = res.has("content-length") ? std::stoul(res.header("content-length")) : 0;
+    while (buffer_.size() < length)
+      if (!fill(deadline)) return std::nullopt;
+    res.body = buffer_.substr(0, length);
+    buffer_.erase(0, length);
+    return res;
+  }
+
+  // True when the server ends the connection (EOF or reset) within `timeout`; any bytes it
+  // sends before that are appended to `extra`.
+  bool closed_by_peer(std::chrono::milliseconds timeout, std::string* extra = nullptr) {
+    auto deadline = Clock::now() + timeout;
+    for (;;) {
+      int left = static_cast<int>(
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count());
+      if (left <= 0) return false;
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, left) <= 0) return false;
+      char buf[4096];
+      ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) return true;
+      if (extra) extra->append(buf, static_cast<size_t>(n));
+    }
+  }
+
+ private:
+  bool fill(Clock::time_point deadline) {
+    int left = static_cast<int>(
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count());
+    if (left <= 0) return false;
+    pollfd p{fd_, POLLIN, 0};
+    if (::poll(&p, 1, left) <= 0) return false;
+    char buf[16384];
+    ssize_t n = ::recv(fd_, buf, sizeof buf, 0);
+    if (n <= 0) return false;
+    buffer_.append(buf, static_cast<size_t>(n));
+    return true;
+  }
+
+  int fd_ = -1;
+  std::string buffer_;
+};
+
+std::string scene_post(const std::string& extra_headers, const std::string& body,
+                       const std::string& path = "/render") {
+  return "POST " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\n" + extra_headers +
+         "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body;
+}
+
+// ---- POST /render ------------------------------------------------------------------------
+
+TEST(ServerRender, ModelBodyIsAcceptedWithLocationAndLinks) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Post("/render", kScene, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 202);
+  Json j = json_of(r);
+  std::string id = j.value("id", "");
+  EXPECT_EQ(id.size(), 32u);
+  EXPECT_EQ(r->get_header_value("Location"), "/jobs/" + id);
+  EXPECT_TRUE(j.contains("state"));
+  EXPECT_TRUE(j["queue_position"].is_number_integer());
+  EXPECT_EQ(j["links"]["self"], "/jobs/" + id);
+  EXPECT_EQ(j["links"]["image"], "/jobs/" + id + "/image");
+  EXPECT_EQ(j["links"]["events"], "/jobs/" + id + "/events");
+  EXPECT_EQ(wait_final(*c, id)["state"], "done");
+}
+
+TEST(ServerRender, JsonBodyIsAcceptedAndRendersLikeTheModelFile) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Post("/render?wait=1", scene_json(), "application/json");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->body, local_render(kScene, {}));
+}
+
+TEST(ServerRender, MultipartScenePartIsAccepted) {
+  TestServer server;
+  auto c = server.client();
+  httplib::MultipartFormDataItems items = {{"scene", kScene, "scene.txt", "text/plain"}};
+  auto r = c->Post("/render?wait=1&spp=2", items);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->body, local_render(kScene, {{"spp", "2"}}));
+
+  httplib::MultipartFormDataItems wrong = {{"model", kScene, "scene.txt", "text/plain"}};
+  auto bad = c->Post("/render", wrong);
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->status, 400);
+  EXPECT_EQ(error_of(bad)["code"], "missing_scene");
+}
+
+TEST(ServerRender, BundledSampleRendersByName) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Post("/render?sample=cho&width=80&height=60&wait=1");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
+  Image image = decode_or_fail(r->body);
+  EXPECT_EQ(image.width, 80);
+  EXPECT_EQ(image.height, 60);
+
+  auto unknown = c->Post("/render?sample=no_such_scene");
+  ASSERT_TRUE(unknown);
+  EXPECT_EQ(unknown->status, 404);
+  EXPECT_EQ(error_of(unknown)["code"], "unknown_sample");
+  EXPECT_NE(error_of(unknown)["message"].get<std::string>().find("cho"), std::string::npos);
+}
+
+TEST(ServerRender, EmptyBodyIs400) {
+  TestServer server;
+  auto c = server.client();
+  for (const std::string body : {"", "  \n\t\r\n"}) {
+    auto r = c->Post("/render", body, "text/plain");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400);
+    EXPECT_EQ(error_of(r)["code"], "empty_scene");
+  }
+}
+
+TEST(ServerRender, SceneErrorsAre400WithPlaceAndEveryError) {
+  TestServer server;
+  auto c = server.client();
+  const std::string bad = "camera c\n{ pixeldim 40 30\n  worlddim 8 6\n  viewpoint 4 3 5 }\n"
+                          "sphere s\n{ material nope\n  center 0 0 -4\n  radious 1 }\n";
+  auto r = c->Post("/render", bad, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  Json e = error_of(r);
+  EXPECT_EQ(e["code"], "invalid_scene");
+  EXPECT_GT(e.value("line", 0), 0);
+  EXPECT_GT(e.value("column", 0), 0);
+  ASSERT_TRUE(e["errors"].is_array());
+  EXPECT_GE(e["errors"].size(), 2u);  // the misspelt attribute and the undefined material
+  bool suggested = false;
+  for (const Json& item : e["errors"]) {
+    EXPECT_TRUE(item.contains("message"));
+    suggested |= item["message"].get<std::string>().find("radius") != std::string::npos;
+  }
+  EXPECT_TRUE(suggested) << e.dump();
+
+  auto json = c->Post("/render", "{\"camera\": [1, 2,", "application/json");
+  ASSERT_TRUE(json);
+  EXPECT_EQ(json->status, 400);
+  EXPECT_EQ(error_of(json)["code"], "invalid_scene");
+}
+
+TEST(ServerRender, BadOptionIs400) {
+  TestServer server;
+  auto c = server.client();
+  for (const char* q : {"spp=abc", "spp=0", "highlight=shiny", "no_such_option=1", "camera=nope"}) {
+    auto r = c->Post(query("/render", q), kScene, "text/plain");
+    ASSERT_TRUE(r) << q;
+    EXPECT_EQ(r->status, 400) << q << ": " << r->body;
+    EXPECT_EQ(error_of(r)["code"], "invalid_option") << q;
+  }
+}
+
+TEST(ServerRender, InputThatIsNotUtf8IsA400NotA500) {
+  TestServer server;
+  auto c = server.client();
+  auto camera = c->Post("/render?camera=%FF%FE", kScene, "text/plain");
+  ASSERT_TRUE(camera);
+  EXPECT_EQ(camera->status, 400) << camera->body;
+  EXPECT_EQ(error_of(camera)["code"], "invalid_option");
+  std::string bad_scene = std::string(kScene) + "\xff\xfe\xfd { }\n";
+  auto scene = c->Post("/render", bad_scene, "text/plain");
+  ASSERT_TRUE(scene);
+  EXPECT_EQ(scene->status, 400) << scene->body;
+  EXPECT_EQ(error_of(scene)["code"], "invalid_scene");
+  auto json = c->Post("/render", "{\"cameras\": {\"\xff\": {}}}", "application/json");
+  ASSERT_TRUE(json);
+  EXPECT_EQ(json->status, 400) << json->body;
+}
+
+TEST(ServerRender, EachLimitIs422AndNamed) {
+  Settings s = test_settings();
+  s.max_pixels = 10000;
+  s.max_spp = 16;
+  s.max_depth = 10;
+  s.max_objects = 1;
+  TestServer server(s);
+  auto c = server.client();
+  const std::string one_object = "camera c { pixeldim 40 30 worlddim 8 6 viewpoint 4 3 5 }\n"
+                                 "material m { diffuse 1 }\n"
+                                 "sphere s { material m center 4 3 -4 radius 1 }\n";
+  struct Case {
+    std::string query, body, limit;
+  } cases[] = {{"width=200&height=100", one_object, "max_pixels"},
+               {"spp=17", one_object, "max_spp"},
+               {"max_depth=11", one_object, "max_depth"},
+               {"", kScene, "max_objects"}};
+  for (const Case& k : cases) {
+    auto r = c->Post(query("/render", k.query), k.body, "text/plain");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 422) << k.limit;
+    EXPECT_EQ(error_of(r)["limit"], k.limit);
+    EXPECT_EQ(error_of(r)["code"], "limit_exceeded");
+  }
+  auto ok = c->Post("/render?spp=16&max_depth=10", one_object, "text/plain");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 202);
+}
+
+TEST(ServerRender, WaitAnswersTheCliBytesWithHeaders) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Post("/render?wait=1&spp=4&seed=7&highlight=blinn", kScene, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
+  EXPECT_EQ(r->get_header_value("X-Job-Id").size(), 32u);
+  EXPECT_FALSE(r->get_header_value("X-Render-Ms").empty());
+  EXPECT_EQ(r->get_header_value("X-Cache"), "miss");
+  EXPECT_FALSE(r->get_header_value("ETag").empty());
+  EXPECT_EQ(r->body, local_render(kScene, {{"spp", "4"}, {"seed", "7"}, {"highlight", "blinn"}}));
+
+  auto ppm = c->Post("/render?wait=1&format=ppm", kScene, "text/plain");
+  ASSERT_TRUE(ppm);
+  ASSERT_EQ(ppm->status, 200);
+  EXPECT_EQ(ppm->get_header_value("Content-Type"), "image/x-portable-pixmap");
+  EXPECT_EQ(ppm->body, local_render(kScene, {}, ImageFormat::ppm));
+}
+
+TEST(ServerRender, BodyOverTheLimitIs413) {
+  Settings s = test_settings();
+  s.max_body_bytes = 64 * 1024;
+  TestServer server(s);
+  auto c = server.client();
+  std::string big = std::string(kScene) + "#" + std::string(70 * 1024, 'x') + "\n";
+  auto r = c->Post("/render", big, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 413);
+  EXPECT_EQ(error_of(r)["limit"], "max_body_bytes");
+  auto ok = c->Post("/render", std::string(kScene) + "#" + std::string(30 * 1024, 'x') + "\n",
+                    "text/plain");
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 202);
+}
+
+TEST(ServerQueue, FullQueueIs429WithRetryAfter) {
+  Settings s = test_settings();
+  s.queue_capacity = 1;
+  TestServer server(s);
+  auto c = server.client();
+  std::string slow = submit(*c, kLong);
+  auto r = c->Post("/render", kScene, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 429);
+  EXPECT_EQ(error_of(r)["code"], "queue_full");
+  EXPECT_GT(std::atoi(r->get_header_value("Retry-After").c_str()), 0);
+  // Room again once the slow job is canceled.
+  ASSERT_EQ(code_of(c->Delete("/jobs/" + slow)), 200);
+  EXPECT_EQ(wait_final(*c, slow)["state"], "canceled");
+  EXPECT_EQ(code_of(c->Post("/render", kScene, "text/plain")), 202);
+}
+
+TEST(ServerQueue, OneClientCannotHoldMoreThanItsShare) {
+  Settings s = test_settings();
+  s.max_jobs_per_client = 2;
+  TestServer server(s);
+  auto alice = server.client("alice");
+  std::string a = submit(*alice, kLong), b = submit(*alice, kLong);
+  auto r = alice->Post("/render", kScene, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 429);
+  EXPECT_EQ(error_of(r)["code"], "too_many_jobs");
+  EXPECT_FALSE(r->get_header_value("Retry-After").empty());
+  EXPECT_EQ(code_of(server.client("bob")->Post("/render", kScene, "text/plain")), 202);
+  alice->Delete("/jobs/" + a);
+  alice->Delete("/jobs/" + b);
+}
+
+// ---- /jobs -------------------------------------------------------------------------------
+
+TEST(ServerJobs, UnknownJobIs404) {
+  TestServer server;
+  auto c = server.client();
+  for (const char* path : {"/jobs/0123456789abcdef0123456789abcdef", "/jobs/nope",
+                           "/jobs/0123456789abcdef0123456789abcdef/image",
+                           "/jobs/0123456789abcdef0123456789abcdef/events"}) {
+    auto r = c->Get(path);
+    ASSERT_TRUE(r) << path;
+    EXPECT_EQ(r->status, 404) << path;
+    EXPECT_EQ(error_of(r)["code"], "not_found") << path;
+  }
+  auto del = c->Delete("/jobs/0123456789abcdef0123456789abcdef");
+  ASSERT_TRUE(del);
+  EXPECT_EQ(del->status, 404);
+}
+
+TEST(ServerJobs, StatusHasTheSpecFields) {
+  TestServer server;
+  auto c = server.client();
+  std::string id = submit(*c, "spp=3");
+  Json st = wait_final(*c, id);
+  EXPECT_EQ(st["state"], "done");
+  EXPECT_EQ(st["progress"], 1.0);
+  EXPECT_EQ(st["queue_position"], 0);
+  for (const char* key : {"created_at", "started_at", "finished_at"})
+    EXPECT_TRUE(st[key].is_string()) << key;
+  EXPECT_TRUE(st["elapsed_ms"].is_number());
+  EXPECT_TRUE(st.contains("eta_ms"));
+  EXPECT_EQ(st["spp_done"], 3);
+  EXPECT_TRUE(st["error_estimate"].is_number());
+  EXPECT_GT(st["stats"]["rays"]["primary"].get<long long>(), 0);
+  EXPECT_TRUE(st["stats"]["rays"].contains("shadow"));
+  EXPECT_TRUE(st["stats"]["rays"].contains("reflection"));
+  EXPECT_TRUE(st["stats"].contains("rays_per_second"));
+  EXPECT_TRUE(st["stats"]["parts"].is_array());
+  EXPECT_EQ(st["options"]["spp"], "3");
+  EXPECT_TRUE(st["error"].is_null());
+}
+
+TEST(ServerJobs, ListShowsOnlyTheCallersJobs) {
+  TestServer server;
+  auto alice = server.client("alice-token");
+  auto bob = server.client("bob-token");
+  std::string a1 = submit(*alice), a2 = submit(*alice, "spp=2"), b1 = submit(*bob);
+  auto ids = [](httplib::Client& c) {
+    auto r = c.Get("/jobs");
+    EXPECT_TRUE(r && r->status == 200);
+    std::vector<std::string> out;
+    Json list = json_of(r);
+    for (const Json& j : list["jobs"]) out.push_back(j["id"]);
+    return out;
+  };
+  EXPECT_EQ(ids(*alice), (std::vector<std::string>{a2, a1}));  // newest first
+  EXPECT_EQ(ids(*bob), (std::vector<std::string>{b1}));
+  EXPECT_TRUE(ids(*server.client()).empty());
+}
+
+TEST(ServerJobs, ImageIs409WhileRunningAndPartialShowsProgress) {
+  TestServer server;
+  auto c = server.client();
+  std::string id = submit(*c, kLong);
+  Json st = wait_running(*c, id);
+  ASSERT_EQ(st["state"], "running");
+  auto r = c->Get("/jobs/" + id + "/image");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 409);
+  EXPECT_EQ(json_of(r)["id"], id);  // the status document
+
+  auto partial = c->Get("/jobs/" + id + "/image?partial=1");
+  ASSERT_TRUE(partial);
+  ASSERT_EQ(partial->status, 200);
+  EXPECT_EQ(partial->get_header_value("Content-Type"), "image/png");
+  EXPECT_EQ(partial->get_header_value("X-Job-State"), "running");
+  Image image = decode_or_fail(partial->body);
+  EXPECT_EQ(image.width, 800);
+  EXPECT_EQ(image.height, 600);
+
+  auto ppm = c->Get("/jobs/" + id + "/image?partial=1&format=ppm");
+  ASSERT_TRUE(ppm);
+  EXPECT_EQ(ppm->body.substr(0, 2), "P6");
+  ASSERT_EQ(code_of(c->Delete("/jobs/" + id)), 200);
+}
+
+TEST(ServerJobs, DoneImageIsPngOrPpmAndRevalidates) {
+  TestServer server;
+  auto c = server.client();
+  std::string id = submit(*c, "spp=2");
+  ASSERT_EQ(wait_final(*c, id)["state"], "done");
+  auto r = c->Get("/jobs/" + id + "/image");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
+  EXPECT_EQ(r->body, local_render(kScene, {{"spp", "2"}}));
+  std::string etag = r->get_header_value("ETag");
+  ASSERT_FALSE(etag.empty());
+
+  auto again = c->Get("/jobs/" + id + "/image", {{"If-None-Match", etag}});
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->status, 304);
+  EXPECT_TRUE(again->body.empty());
+
+  auto ppm = c->Get("/jobs/" + id + "/image?format=ppm");
+  ASSERT_TRUE(ppm);
+  ASSERT_EQ(ppm->status, 200);
+  EXPECT_EQ(ppm->get_header_value("Content-Type"), "image/x-portable-pixmap");
+  EXPECT_EQ(ppm->body, local_render(kScene, {{"spp", "2"}}, ImageFormat::ppm));
+  EXPECT_NE(ppm->get_header_value("ETag"), etag);  // another representation
+}
+
+TEST(ServerJobs, DeleteStopsARunningJobWithinASecond) {
+  TestServer server;
+  auto c = server.client();
+  std::string id = submit(*c, kLong);
+  ASSERT_EQ(wait_running(*c, id)["state"], "running");
+  std::this_thread::sleep_for(100ms);  // well into rendering
+  auto start = Clock::now();
+  auto r = c->Delete("/jobs/" + id);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  Json st = wait_final(*c, id, 5s);
+  auto took = Clock::now() - start;
+  EXPECT_EQ(st["state"], "canceled");
+  EXPECT_LT(took, 1s);
+  EXPECT_LT(st["progress"].get<double>(), 0.5);
+
+  auto image = c->Get("/jobs/" + id + "/image");
+  ASSERT_TRUE(image);
+  EXPECT_EQ(image->status, 410);
+  EXPECT_EQ(error_of(image)["code"], "canceled");
+  EXPECT_EQ(code_of(c->Delete("/jobs/" + id)), 200);  // canceling twice is fine
+}
+
+TEST(ServerJobs, DeleteOfAQueuedJobCancelsIt) {
+  Settings s = test_settings();
+  s.workers = 1;
+  TestServer server(s);
+  auto c = server.client("alice");
+  auto other = server.client("bob");
+  std::string first = submit(*other, kLong);
+  ASSERT_EQ(wait_running(*other, first)["state"], "running");
+  // Five of one client: the fifth waits (a client runs at most four jobs at once).
+  std::vector<std::string> ids;
+  for (int i = 0; i < 5; ++i) ids.push_back(submit(*c, kLong));
+  Json st = status_of(*c, ids.back());
+  ASSERT_EQ(st["state"], "queued");
+  EXPECT_GT(st["queue_position"].get<int>(), 0);
+  ASSERT_EQ(code_of(c->Delete("/jobs/" + ids.back())), 200);
+  EXPECT_EQ(status_of(*c, ids.back())["state"], "canceled");
+  for (auto& id : ids) c->Delete("/jobs/" + id);
+  other->Delete("/jobs/" + first);
+}
+
+TEST(ServerJobs, OnlyTheSubmitterMayCancel) {
+  TestServer server;
+  auto alice = server.client("alice-token");
+  auto bob = server.client("bob-token");
+  std::string id = submit(*alice, kLong);
+  auto r = bob->Delete("/jobs/" + id);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 403);
+  EXPECT_NE(status_of(*alice, id)["state"], "canceled");
+  EXPECT_EQ(code_of(alice->Delete("/jobs/" + id)), 200);
+  EXPECT_EQ(wait_final(*alice, id)["state"], "canceled");
+
+  std::string done = submit(*alice);
+  ASSERT_EQ(wait_final(*alice, done)["state"], "done");
+  auto late = alice->Delete("/jobs/" + done);
+  ASSERT_TRUE(late);
+  EXPECT_EQ(late->status, 409);
+}
+
+// ---- Fair sharing ------------------------------------------------------------------------
+
+void small_job_overtakes_big_job(const std::string& big_client, const std::string& small_client) {
+  TestServer server;
+  auto big_c = server.client(big_client);
+  auto small_c = server.client(small_client);
+  std::string big = submit(*big_c, "width=800&height=600&spp=256");
+  ASSERT_EQ(wait_running(*big_c, big)["state"], "running");
+  std::string small = submit(*small_c, "spp=2");
+  Json small_st = wait_final(*small_c, small, 30s);
+  Json big_st = status_of(*big_c, big);
+  EXPECT_EQ(small_st["state"], "done");
+  EXPECT_EQ(big_st["state"], "running") << "the small job waited for the big one";
+  EXPECT_LT(big_st["progress"].get<double>(), 1.0);
+  big_c->Delete("/jobs/" + big);
+}
+
+TEST(ServerFairness, SmallJobOfAnotherClientFinishesBeforeABigOne) {
+  small_job_overtakes_big_job("alice", "bob");
+}
+
+TEST(ServerFairness, SmallJobOfTheSameClientFinishesBeforeABigOne) {
+  small_job_overtakes_big_job("alice", "alice");
+}
+
+// Many one-tile jobs at once: workers constantly pick jobs that another worker is finishing.
+TEST(ServerFairness, ManySmallJobsOfManyClientsAllFinish) {
+  TestServer server;
+  std::vector<std::thread> threads;
+  std::atomic<int> done{0};
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      auto c = server.client("client-" + std::to_string(t));
+      std::vector<std::string> ids;
+      for (int i = 0; i < 15; ++i)
+        ids.push_back(submit(*c, "width=16&height=12&spp=3&seed=" + std::to_string(t * 100 + i)));
+      for (auto& id : ids) done += wait_final(*c, id, 60s).value("state", "") == "done";
+    });
+  for (auto& t : threads) t.join();
+  EXPECT_EQ(done, 60);
+}
+
+// ---- Event streams -----------------------------------------------------------------------
+
+struct Event {
+  std::string name;
+  Json data;
+};
+
+std::vector<Event> parse_events(const std::string& text) {
+  std::vector<Event> out;
+  size_t pos = 0;
+  for (size_t end; (end = text.find("\n\n", pos)) != std::string::npos; pos = end + 2) {
+    std::string block = text.substr(pos, end - pos);
+    Event e;
+    std::string data;
+    size_t lp = 0;
+    while (lp <= block.size()) {
+      size_t le = block.find('\n', lp);
+      if (le == std::string::npos) le = block.size();
+      std::string line = block.substr(lp, le - lp);
+      if (line.rfind("event: ", 0) == 0) e.name = line.substr(7);
+      if (line.rfind("data: ", 0) == 0) data += line.substr(6);
+      lp = le + 1;
+    }
+    if (e.name.empty()) continue;  // a comment (keep-alive)
+    e.data = Json::parse(data, nullptr, false);
+    out.push_back(e);
+  }
+  return out;
+}
+
+TEST(ServerEvents, StreamSendsProgressThenDoneAndEnds) {
+  TestServer server;
+  auto c = server.client();
+  std::string id = submit(*c, "width=400&height=300&spp=48");
+  std::string text;
+  auto start = Clock::now();
+  auto r = c->Get("/jobs/" + id + "/events", [&](const char* data, size_t n) {
+    text.append(data, n);
+    return true;
+  });
+  ASSERT_TRUE(r) << "the stream did not end";
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "text/event-stream");
+  EXPECT_LT(Clock::now() - start, 60s);
+  auto events = parse_events(text);
+  ASSERT_GE(events.size(), 2u) << text;
+  for (size_t i = 0; i + 1 < events.size(); ++i) EXPECT_EQ(events[i].name, "progress");
+  EXPECT_EQ(events.back().name, "done");
+  EXPECT_EQ(events.back().data["state"], "done");
+  EXPECT_EQ(events.back().data["progress"], 1.0);
+  // Progress only grows.
+  double last = -1;
+  for (auto& e : events) {
+    double p = e.data["progress"].get<double>();
+    EXPECT_GE(p, last);
+    last = p;
+  }
+}
+
+TEST(ServerEvents, StreamsOverTheCapAre503AndACancelEndsTheStream) {
+  Settings s = test_settings();
+  s.max_event_streams = 1;
+  TestServer server(s);
+  auto c = server.client();
+  std::string id = submit(*c, kLong);
+  std::mutex mu;
+  std::string text;
+  std::atomic<bool> ended{false};
+  std::thread reader([&] {
+    auto rc = server.client();
+    rc->Get("/jobs/" + id + "/events", [&](const char* data, size_t n) {
+      std::lock_guard lock(mu);
+      text.append(data, n);
+      return true;
+    });
+    ended = true;
+  });
+  auto received = [&] {
+    std::lock_guard lock(mu);
+    return !text.empty();
+  };
+  auto deadline = Clock::now() + 10s;
+  while (!received() && Clock::now() < deadline) std::this_thread::sleep_for(5ms);
+  EXPECT_TRUE(received());
+  // The first stream holds the only slot.
+  auto r = c->Get("/jobs/" + id + "/events");
+  EXPECT_TRUE(r && r->status == 503);
+  EXPECT_TRUE(r && !r->get_header_value("Retry-After").empty());
+  EXPECT_EQ(code_of(c->Delete("/jobs/" + id)), 200);  // ends the first stream
+  reader.join();
+  EXPECT_TRUE(ended);
+  auto events = parse_events(text);
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.back().name, "canceled");
+}
+
+// ---- The result cache --------------------------------------------------------------------
+
+TEST(ServerCache, SameSceneAndOptionsAreACacheHit) {
+  TestServer server;
+  auto c = server.client();
+  auto first = c->Post("/render?wait=1&spp=2", kScene, "text/plain");
+  ASSERT_TRUE(first);
+  ASSERT_EQ(first->status, 200);
+  EXPECT_EQ(first->get_header_value("X-Cache"), "miss");
+  // Layout and comments do not matter: the scene as parsed is the key.
+  std::string relaid = "# another comment\n" + std::string(kScene);
+  auto second = c->Post("/render?wait=1&spp=2", relaid, "text/plain");
+  ASSERT_TRUE(second);
+  ASSERT_EQ(second->status, 200);
+  EXPECT_EQ(second->get_header_value("X-Cache"), "hit");
+  EXPECT_EQ(second->body, first->body);
+  EXPECT_NE(second->get_header_value("X-Job-Id"), first->get_header_value("X-Job-Id"));
+  auto other = c->Post("/render?wait=1&spp=3", kScene, "text/plain");
+  ASSERT_TRUE(other);
+  EXPECT_EQ(other->get_header_value("X-Cache"), "miss");
+  auto m = c->Get("/metrics");
+  ASSERT_TRUE(m);
+  const std::string& metrics = m->body;
+  EXPECT_NE(metrics.find("rayfarm_cache_hits_total 1\n"), std::string::npos) << metrics;
+}
+
+TEST(ServerCache, ModelFileAndItsJsonTwinShareAnEntry) {
+  TestServer server;
+  auto c = server.client();
+  auto model = c->Post("/render?wait=1", kScene, "text/plain");
+  ASSERT_TRUE(model);
+  ASSERT_EQ(model->status, 200);
+  auto json = c->Post("/render?wait=1", scene_json(), "application/json");
+  ASSERT_TRUE(json);
+  ASSERT_EQ(json->status, 200) << json->body;
+  EXPECT_EQ(json->get_header_value("X-Cache"), "hit");
+  EXPECT_EQ(json->body, model->body);
+}
+
+// ---- Restarts ----------------------------------------------------------------------------
+
+struct TempDir {
+  std::filesystem::path path;
+  TempDir() {
+    std::string tmpl = (std::filesystem::temp_directory_path() / "rayfarm-test-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp");
+    path = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+};
+
+TEST(ServerRestart, FinishedImagesAreServedAfterARestart) {
+  TempDir dir;
+  Settings s = test_settings();
+  s.results_dir = dir.path.string();
+  std::string id, png, etag;
+  {
+    TestServer server(s);
+    auto c = server.client();
+    auto r = c->Post("/render?wait=1&spp=2", kScene, "text/plain");
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200);
+    id = r->get_header_value("X-Job-Id");
+    png = r->body;
+    etag = r->get_header_value("ETag");
+  }
+  TestServer server(s);
+  auto c = server.client();
+  EXPECT_EQ(status_of(*c, id)["state"], "done");
+  auto r = c->Get("/jobs/" + id + "/image");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_EQ(r->body, png);
+  EXPECT_EQ(r->get_header_value("ETag"), etag);
+  // And the restarted cache still knows it.
+  auto again = c->Post("/render?wait=1&spp=2", kScene, "text/plain");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->get_header_value("X-Cache"), "hit");
+}
+
+TEST(ServerRestart, InterruptedJobRunsAgainAfterARestart) {
+  TempDir dir;
+  Settings s = test_settings();
+  s.results_dir = dir.path.string();
+  s.shutdown_grace = 0;
+  const std::string q = "width=200&height=150&spp=512&seed=5";
+  std::string id, queued;
+  {
+    TestServer server(s);
+    auto c = server.client("alice");
+    id = submit(*c, q);
+    ASSERT_EQ(wait_running(*c, id)["state"], "running");
+    server.stop();  // grace 0: the render is interrupted
+  }
+  TestServer server(s);
+  auto c = server.client("alice");
+  Json st = wait_final(*c, id, 120s);
+  EXPECT_EQ(st["state"], "done") << st.dump();
+  EXPECT_EQ(st["options"]["spp"], "512");
+  auto r = c->Get("/jobs/" + id + "/image");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_EQ(r->body, local_render(kScene, {{"width", "200"}, {"height", "150"}, {"spp", "512"},
+                                           {"seed", "5"}}));
+  // Still the same client's job.
+  auto list = json_of(c->Get("/jobs"));
+  ASSERT_EQ(list["jobs"].size(), 1u);
+  EXPECT_EQ(list["jobs"][0]["id"], id);
+}
+
+// ---- POST /compare -----------------------------------------------------------------------
+
+Image gradient(int w, int h) {
+  Image image(w, h);
+  for (size_t i = 0; i < image.rgb.size(); ++i) image.rgb[i] = static_cast<std::uint8_t>(i * 7);
+  return image;
+}
+
+TEST(ServerCompare, TwoImagesGiveMetrics) {
+  TestServer server;
+  auto c = server.client();
+  Image a = gradient(20, 10), b = a;
+  b.rgb[0] = static_cast<std::uint8_t>(b.rgb[0] + 9);
+  b.rgb[30] = static_cast<std::uint8_t>(b.rgb[30] + 2);
+  auto ppm_b = encode_ppm(b);
+  httplib::MultipartFormDataItems items = {
+      {"a", png_bytes(a), "a.png", "image/png"},
+      {"b", std::string(ppm_b.begin(), ppm_b.end()), "b.ppm", "image/x-portable-pixmap"}};
+  auto r = c->Post("/compare", items);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  Json j = json_of(r);
+  for (const char* key : {"rmse", "psnr", "max_abs", "mean_abs", "differing_pixels"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["max_abs"], 9);
+  EXPECT_EQ(j["differing_pixels"], 2);
+  EXPECT_GT(j["rmse"].get<double>(), 0);
+  EXPECT_EQ(j["identical"], false);
+}
+
+TEST(ServerCompare, ThresholdAndNeighborhoodAreTheGradersRules) {
+  TestServer server;
+  auto c = server.client();
+  Image a(12, 8), b(12, 8);
+  a.row(3)[4 * 3] = 200;  // one bright pixel, one column apart in the two images
+  b.row(3)[5 * 3] = 200;
+  a.row(6)[1 * 3 + 1] = 4;  // a small difference
+  httplib::MultipartFormDataItems items = {{"a", png_bytes(a), "a.png", "image/png"},
+                                           {"b", png_bytes(b), "b.png", "image/png"}};
+  for (auto [t, n] : {std::pair{0, false}, {10, false}, {0, true}, {10, true}}) {
+    std::string q = "/compare?threshold=" + std::to_string(t) + (n ? "&neighborhood=1" : "");
+    auto r = c->Post(q, items);
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << r->body;
+    CompareOptions options;
+    options.threshold = t;
+    options.neighborhood = n;
+    std::string error;
+    auto expected = compare_images(a, b, options, &error);
+    ASSERT_TRUE(expected);
+    Json j = json_of(r);
+    EXPECT_EQ(j["differing_pixels"], expected->differing_pixels) << q;
+    EXPECT_EQ(j["threshold"], t);
+    EXPECT_EQ(j["neighborhood"], n);
+  }
+  auto strict = json_of(c->Post("/compare?threshold=0", items));
+  auto lenient = json_of(c->Post("/compare?threshold=10&neighborhood=1", items));
+  EXPECT_LT(lenient["differing_pixels"].get<int>(), strict["differing_pixels"].get<int>());
+  auto bad = c->Post("/compare?threshold=abc", items);
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->status, 400);
+}
+
+TEST(ServerCompare, SceneAndImageRendersTheReference) {
+  TestServer server;
+  auto c = server.client();
+  std::string mine = local_render(kScene, {{"spp", "2"}});
+  httplib::MultipartFormDataItems items = {{"scene", kScene, "scene.txt", "text/plain"},
+                                           {"image", mine, "mine.png", "image/png"}};
+  auto r = c->Post("/compare?spp=2", items);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  Json j = json_of(r);
+  EXPECT_EQ(j["identical"], true);
+  EXPECT_EQ(j["rmse"], 0.0);
+  EXPECT_EQ(j["differing_pixels"], 0);
+  EXPECT_EQ(j["reference_job"].get<std::string>().size(), 32u);
+
+  auto off = c->Post("/compare?spp=1", items);  // another reference: not identical
+  ASSERT_TRUE(off);
+  ASSERT_EQ(off->status, 200);
+  EXPECT_EQ(json_of(off)["identical"], false);
+}
+
+TEST(ServerCompare, DifferentSizesAre422) {
+  TestServer server;
+  auto c = server.client();
+  httplib::MultipartFormDataItems items = {{"a", png_bytes(gradient(10, 10)), "a.png", "image/png"},
+                                           {"b", png_bytes(gradient(10, 11)), "b.png", "image/png"}};
+  auto r = c->Post("/compare", items);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 422);
+  httplib::MultipartFormDataItems junk = {{"a", "not an image", "a.png", "image/png"},
+                                          {"b", png_bytes(gradient(10, 10)), "b.png", "image/png"}};
+  auto bad = c->Post("/compare", junk);
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->status, 400);
+  auto none = c->Post("/compare", httplib::MultipartFormDataItems{{"x", "y", "", ""}});
+  ASSERT_TRUE(none);
+  EXPECT_EQ(none->status, 400);
+}
+
+TEST(ServerCompare, DiffAnswersAPng) {
+  TestServer server;
+  auto c = server.client();
+  Image a = gradient(16, 9), b = a;
+  b.rgb[5] = static_cast<std::uint8_t>(b.rgb[5] + 50);
+  httplib::MultipartFormDataItems items = {{"a", png_bytes(a), "a.png", "image/png"},
+                                           {"b", png_bytes(b), "b.png", "image/png"}};
+  auto r = c->Post("/compare?diff=1", items);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
+  EXPECT_EQ(decode_or_fail(r->body), diff_image(a, b, {}));
+}
+
+// ---- Samples, health, metrics, authentication --------------------------------------------
+
+TEST(ServerInfo, SamplesListsTheBundledScenes) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Get("/samples");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  bool found = false;
+  Json list = json_of(r);
+  for (const Json& s : list["samples"])
+    if (s["name"] == "cho") {
+      found = true;
+      EXPECT_EQ(s["render"], "/render?sample=cho");
+      EXPECT_FALSE(s["description"].get<std::string>().empty());
+    }
+  EXPECT_TRUE(found) << r->body;
+}
+
+TEST(ServerInfo, HealthzReportsQueueFigures) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Get("/healthz");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  Json j = json_of(r);
+  EXPECT_EQ(j["status"], "ok");
+  for (const char* key : {"queue_depth", "running", "queue_capacity", "workers"})
+    EXPECT_TRUE(j[key].is_number()) << key;
+  EXPECT_EQ(j["workers"], 2);
+}
+
+TEST(ServerInfo, MetricsArePrometheusText) {
+  TestServer server;
+  auto c = server.client();
+  auto ok = c->Post("/render?wait=1", kScene, "text/plain");
+  ASSERT_TRUE(ok);
+  ASSERT_EQ(ok->status, 200);
+  c->Get("/jobs/0123456789abcdef0123456789abcdef");
+  const std::vector<std::string> needles = {
+      "# TYPE rayfarm_jobs gauge", "rayfarm_jobs{state=\"done\"} 1\n",
+      "# TYPE rayfarm_queue_depth gauge", "rayfarm_queue_depth 0\n",
+      "# TYPE rayfarm_render_seconds histogram", "rayfarm_render_seconds_bucket{le=\"+Inf\"} 1\n",
+      "rayfarm_render_seconds_count 1\n", "rayfarm_render_seconds_sum ",
+      "# TYPE rayfarm_rays_total counter", "rayfarm_rays_total{kind=\"primary\"} 1200\n",
+      "# TYPE rayfarm_http_requests_total counter",
+      "rayfarm_http_requests_total{route=\"POST /render\",code=\"200\"} 1\n",
+      "rayfarm_http_requests_total{route=\"GET /jobs/:id\",code=\"404\"} 1\n",
+      "# TYPE rayfarm_cache_hits_total counter", "rayfarm_cache_hits_total 0\n"};
+  // A request is counted once its answer is written: the client may be a moment ahead.
+  std::string m;
+  auto deadline = Clock::now() + 2s;
+  for (;;) {
+    auto r = c->Get("/metrics");
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200);
+    EXPECT_EQ(r->get_header_value("Content-Type").rfind("text/plain", 0), 0u);
+    m = r->body;
+    bool all = true;
+    for (auto& n : needles) all &= m.find(n) != std::string::npos;
+    if (all || Clock::now() > deadline) break;
+    std::this_thread::sleep_for(10ms);
+  }
+  for (auto& needle : needles) EXPECT_NE(m.find(needle), std::string::npos) << needle << "\n" << m;
+  // Every sample line is `name{labels} value` with a known prefix.
+  size_t pos = 0;
+  while (pos < m.size()) {
+    size_t end = m.find('\n', pos);
+    std::string line = m.substr(pos, end - pos);
+    pos = end + 1;
+    if (line.empty() || line[0] == '#') continue;
+    EXPECT_EQ(line.rfind("rayfarm_", 0), 0u) << line;
+    EXPECT_NE(line.find(' '), std::string::npos) << line;
+  }
+}
+
+TEST(ServerAuth, ConfiguredTokensAreRequired) {
+  Settings s = test_settings();
+  s.tokens = {"s3cret", "other"};
+  TestServer server(s);
+  auto none = server.client();
+  auto wrong = server.client("guess");
+  auto right = server.client("s3cret");
+  for (auto* c : {none.get(), wrong.get()}) {
+    auto r = c->Post("/render", kScene, "text/plain");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 401);
+    EXPECT_EQ(error_of(r)["code"], "unauthorized");
+    EXPECT_EQ(r->get_header_value("WWW-Authenticate"), "Bearer");
+    EXPECT_EQ(code_of(c->Get("/jobs")), 401);
+    EXPECT_EQ(code_of(c->Get("/samples")), 401);
+  }
+  std::string id = submit(*right);
+  EXPECT_EQ(wait_final(*right, id)["state"], "done");
+  EXPECT_EQ(code_of(none->Get("/jobs/" + id)), 401);
+  EXPECT_EQ(code_of(none->Get("/healthz")), 200);
+  EXPECT_EQ(code_of(server.client("other")->Get("/jobs")), 200);
+}
+
+// ---- cpp-httplib 0.11.4 weaknesses, over a raw socket ------------------------------------
+
+TEST(ServerHardening, ChunkedBodyIsRefusedWithoutReadingIt) {
+  Settings s = test_settings();
+  s.max_body_bytes = 64 * 1024;
+  TestServer server(s);
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send("POST /render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: text/plain\r\n"
+                        "Transfer-Encoding: chunked\r\n\r\n"));
+  const std::string chunk = std::string("4000\r\n") + std::string(0x4000, '#') + "\r\n";
+  ASSERT_TRUE(conn.send(chunk));
+  auto r = conn.read_response();
+  ASSERT_TRUE(r) << "no answer before the body was complete";
+  EXPECT_TRUE(r->status == 411 || r->status == 413) << r->status;
+  EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["code"], "length_required");
+  // The rest (3x the limit) is not read as further requests: the server ends the connection.
+  for (int i = 0; i < 12; ++i)
+    if (!conn.send(chunk, 500ms)) break;
+  std::string extra;
+  EXPECT_TRUE(conn.closed_by_peer(3s, &extra));
+  EXPECT_EQ(extra.find("HTTP/1.1"), std::string::npos) << "the body was parsed as requests:\n"
+                                                      << extra.substr(0, 300);
+  EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
+}
+
+TEST(ServerHardening, OversizedBodyIsRefusedBeforeA100Continue) {
+  Settings s = test_settings();
+  s.max_body_bytes = 64 * 1024;
+  TestServer server(s);
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send("POST /render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: text/plain\r\n"
+                        "Expect: 100-continue\r\nContent-Length: 10000000\r\n\r\n"));
+  auto r = conn.read_response();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 413) << "the client was told to send the body";
+  EXPECT_TRUE(conn.closed_by_peer(3s));
+
+  // Within the limit, the client is asked for the body and the upload works.
+  RawConnection ok(server.port());
+  std::string body = kScene;
+  ASSERT_TRUE(ok.send("POST /render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: text/plain\r\n"
+                      "Expect: 100-continue\r\nContent-Length: " +
+                      std::to_string(body.size()) + "\r\n\r\n"));
+  auto cont = ok.read_response();
+  ASSERT_TRUE(cont);
+  EXPECT_EQ(cont->status, 100);
+  ASSERT_TRUE(ok.send(body));
+  auto accepted = ok.read_response();
+  ASSERT_TRUE(accepted);
+  EXPECT_EQ(accepted->status, 202);
+}
+
+TEST(ServerHardening, CompressedBodyIs415) {
+  TestServer server;
+  RawConnection conn(server.port());
+  // 1 KiB of zeros, gzip-compressed: a tiny bomb as far as the server may know.
+  const unsigned char gz[] = {0x1f, 0x8b, 0x08, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x03,
+                              0x63, 0x60, 0x18, 0x05, 0xa3, 0x60, 0x14, 0x0c, 0x77, 0x00,
+                              0x00, 0xa1, 0x9e, 0x58, 0x08, 0x00, 0x04, 0x00, 0x00};
+  std::string body(reinterpret_cast<const char*>(gz), sizeof gz);
+  ASSERT_TRUE(conn.send(scene_post("Content-Type: text/plain\r\nContent-Encoding: gzip\r\n", body)));
+  auto r = conn.read_response();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 415);
+  EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["code"], "unsupported_encoding");
+}
+
+TEST(ServerHardening, ManyPartRangeDoesNotMultiplyTheImage) {
+  TestServer server;
+  auto c = server.client();
+  auto done = c->Post("/render?wait=1", kScene, "text/plain");
+  ASSERT_TRUE(done);
+  ASSERT_EQ(done->status, 200);
+  std::string id = done->get_header_value("X-Job-Id");
+  std::string ranges = "bytes=0-";
+  for (int i = 0; i < 200; ++i) ranges += ",0-" + std::to_string(done->body.size() - 1);
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send("GET /jobs/" + id + "/image HTTP/1.1\r\nHost: 127.0.0.1\r\nRange: " +
+                        ranges + "\r\n\r\n"));
+  auto r = conn.read_response();
+  ASSERT_TRUE(r);
+  EXPECT_TRUE(r->status == 416 || r->body.size() <= done->body.size())
+      << r->status << " with " << r->body.size() << " bytes";
+}
+
+TEST(ServerHardening, HandlerExceptionTextIsNotSent) {
+  TestServer server(test_settings(), [](httplib::Server& http) {
+    http.Get("/throw", [](const httplib::Request&, httplib::Response&) {
+      throw std::runtime_error("secret-internal-detail");
+    });
+  });
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send("GET /throw HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
+  auto r = conn.read_response();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 500);
+  EXPECT_FALSE(r->has("exception_what"));
+  for (auto& [name, value] : r->headers)
+    EXPECT_EQ(value.find("secret"), std::string::npos) << name;
+  EXPECT_EQ(r->body.find("secret"), std::string::npos);
+  EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["code"], "internal_error");
+  EXPECT_EQ(r->header("content-type"), "application/json");
+}
+
+TEST(ServerHardening, RemoteAddrHeaderDoesNotChangeWhoIsAsking) {
+  TestServer server;
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send(scene_post("Content-Type: text/plain\r\nREMOTE_ADDR: 10.9.8.7\r\n", kScene)));
+  auto r = conn.read_response();
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202);
+  std::string id = Json::parse(r->body)["id"];
+  // A plain client from the same socket address owns the job.
+  auto c = server.client();
+  auto list = json_of(c->Get("/jobs"));
+  ASSERT_EQ(list["jobs"].size(), 1u);
+  EXPECT_EQ(list["jobs"][0]["id"], id);
+  // And forging the header again on another connection sees the same list, not another's.
+  RawConnection other(server.port());
+  ASSERT_TRUE(other.send("GET /jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nREMOTE_ADDR: 10.1.1.1\r\n\r\n"));
+  auto mine = other.read_response();
+  ASSERT_TRUE(mine);
+  EXPECT_EQ(Json::parse(mine->body)["jobs"].size(), 1u);
+}
+
+TEST(ServerHardening, VeryLongPathsAnswerQuickly) {
+  TestServer server;
+  for (size_t length : {size_t(600), size_t(6000), size_t(10 * 1024)}) {
+    RawConnection conn(server.port());
+    auto start = Clock::now();
+    ASSERT_TRUE(conn.send("GET /jobs/" + std::string(length, 'a') + "/image HTTP/1.1\r\nHost: x\r\n\r\n"));
+    auto r = conn.read_response(2s);
+    ASSERT_TRUE(r) << length;
+    EXPECT_TRUE(r->status == 414 || r->status == 404) << r->status;
+    EXPECT_LT(Clock::now() - start, 1s) << length;
+  }
+  EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
+}
+
+TEST(ServerHardening, StalledClientsDoNotBlockHealthz) {
+  TestServer server;
+  std::vector<std::unique_ptr<RawConnection>> stalled;
+  for (int i = 0; i < 8; ++i) {
+    stalled.push_back(std::make_unique<RawConnection>(server.port()));
+    ASSERT_TRUE(stalled.back()->send("GET /heal"));
+  }
+  std::this_thread::sleep_for(100ms);
+  auto c = server.client();
+  c->set_read_timeout(2);
+  for (int i = 0; i < 3; ++i) {
+    auto start = Clock::now();
+    auto r = c->Get("/healthz");
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 200);
+    EXPECT_LT(Clock::now() - start, 1s);
+  }
+}
+
+TEST(ServerHardening, EndlessHeaderBlockIsCutOff) {
+  TestServer server;
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send("GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\n"));
+  std::string headers;
+  for (int i = 0; i < 2000; ++i) headers += "X-Filler-" + std::to_string(i) + ": " + std::string(100, 'v') + "\r\n";
+  // ~230 KiB of headers and no end: the server gives up well before the read timeout.
+  auto start = Clock::now();
+  conn.send(headers, 1s);
+  std::string extra;
+  EXPECT_TRUE(conn.closed_by_peer(3s, &extra));
+  EXPECT_LT(Clock::now() - start, 4s);
+  EXPECT_EQ(extra.find("HTTP/1.1 200"), std::string::npos);
+  EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
+}
+
+TEST(ServerHardening, TricklingHeadIsCutOffAtTheHeaderTimeout) {
+  Settings s = test_settings();
+  s.header_timeout = 1;
+  TestServer server(s);
+  RawConnection conn(server.port());
+  auto start = Clock::now();
+  ASSERT_TRUE(conn.send("GET /healthz HTTP/1.1\r\n"));
+  bool closed = false;
+  for (int i = 0; i < 50 && !closed; ++i) {
+    if (!conn.send("X-Slow-" + std::to_string(i) + ": 1\r\n")) break;  // under the read timeout
+    closed = conn.closed_by_peer(100ms);
+  }
+  EXPECT_TRUE(closed || conn.closed_by_peer(1s));
+  EXPECT_LT(Clock::now() - start, 2500ms);
+  // A prompt client on another connection is unaffected.
+  EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
+}
+
+TEST(ServerHardening, CurlStyleFormUploadOver8KiBWorks) {
+  TestServer server;
+  // curl --data-binary @scene.txt labels the body a urlencoded form.
+  std::string body = std::string(kScene) + "# a=b&c=d%20e\n";
+  while (body.size() < 12 * 1024) body += "# padding padding padding padding padding padding\n";
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send(scene_post("Content-Type: application/x-www-form-urlencoded\r\n", body,
+                                   "/render?spp=2")));
+  auto r = conn.read_response();
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  std::string id = Json::parse(r->body)["id"];
+  auto c = server.client();
+  Json st = wait_final(*c, id);
+  EXPECT_EQ(st["state"], "done");
+  EXPECT_EQ(st["options"]["spp"], "2");
+}
+
+TEST(ServerConnections, KeepAliveAndPipelinedRequestsAreServed) {
+  auto server = std::make_unique<TestServer>();
+  auto c = server->client();
+  c->set_keep_alive(true);
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_EQ(code_of(c->Get("/healthz")), 200);
+    EXPECT_EQ(code_of(c->Post("/render", kScene, "text/plain")), 202);
+  }
+  RawConnection conn(server->port());
+  std::string two = "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n" +
+                    scene_post("Content-Type: text/plain\r\n", kScene) +
+                    "GET /samples HTTP/1.1\r\nHost: x\r\n\r\n";
+  ASSERT_TRUE(conn.send(two));
+  for (int expected : {200, 202, 200}) {
+    auto r = conn.read_response();
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, expected);
+  }
+  // Idle keep-alive connections do not hold up a stop.
+  auto start = Clock::now();
+  server.reset();
+  EXPECT_LT(Clock::now() - start, 1500ms);
+}
+
+TEST(ServerConnections, DepartedEventStreamClientFreesItsSlot) {
+  Settings s = test_settings();
+  s.max_event_streams = 1;
+  TestServer server(s);
+  auto c = server.client();
+  std::string id = submit(*c, kLong);
+  {
+    RawConnection conn(server.port());
+    ASSERT_TRUE(conn.send("GET /jobs/" + id + "/events HTTP/1.1\r\nHost: x\r\n\r\n"));
+    std::string first;
+    conn.closed_by_peer(300ms, &first);
+    EXPECT_NE(first.find("text/event-stream"), std::string::npos);
+  }  // gone without a word
+  auto deadline = Clock::now() + 3s;
+  int status = 0;
+  while (Clock::now() < deadline) {
+    c->Get(
+        "/jobs/" + id + "/events",
+        [&](const httplib::Response& res) {
+          status = res.status;
+          return false;  // only the status is wanted
+        },
+        [](const char*, size_t) { return false; });
+    if (status != 503) break;
+    std::this_thread::sleep_for(50ms);
+  }
+  EXPECT_EQ(status, 200) << "the slot of a departed client was not freed";
+  c->Delete("/jobs/" + id);
+}
+
+TEST(ServerHardening, ShutdownRefusesNewWorkAndEndsWaits) {
+  Settings s = test_settings();
+  TestServer server(s);
+  auto c = server.client();
+  std::string id = submit(*c, kLong);
+  int wait_status = 0;
+  std::thread waiter([&] {
+    auto r = server.client()->Post("/render?wait=1&" + std::string(kLong) + "&seed=1", kScene,
+                                   "text/plain");
+    wait_status = r ? r->status : -1;
+  });
+  std::this_thread::sleep_for(200ms);
+  auto start = Clock::now();
+  server.service().shutdown();
+  waiter.join();
+  EXPECT_LT(Clock::now() - start, 5s);
+  EXPECT_EQ(wait_status, 202);  // the job is kept; the client polls for it later
+  auto r = c->Post("/render", kScene, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 503);
+  EXPECT_FALSE(r->get_header_value("Retry-After").empty());
+  EXPECT_EQ(code_of(c->Get("/healthz")), 503);
+}
+
+}  // namespace
+}  // namespace rayfarm::server
