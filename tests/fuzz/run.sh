@@ -7,7 +7,8 @@ set -euo pipefail
 seconds=${1:-60}
 build=build-fuzz
 CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DRAYFARM_FUZZ=ON -DRAYFARM_BUILD_TESTS=OFF >/dev/null
+  -DRAYFARM_FUZZ=ON -DRAYFARM_BUILD_TESTS=OFF \
+  -DRAYFARM_SANITIZE=fuzzer-no-link,address,undefined >/dev/null
 cmake --build "$build" -j2 --target fuzz_model_parser fuzz_json_scene fuzz_http_request
 for target in model_parser json_scene http_request; do
   corpus="$build/corpus-$target"
