@@ -3,7 +3,7 @@
 # counts, against a rayfarmd started here on a loopback port. Bounded: DURATION seconds per
 # run. Usage: tests/load/wrk_render.sh [BUILD_DIR] (from the repository root).
 set -euo pipefail
-build=${1:-build}
+build=${1:-${BUILD:-build}}
 duration=${DURATION:-10}
 connections=${CONNECTIONS:-"8 32 64"}
 port=$((20000 + RANDOM % 20000))
