@@ -240,6 +240,10 @@ ApiError Service::check_limits(const Scene& scene, const RenderOptions& o, int w
   if (objects > static_cast<size_t>(s.max_objects))
     return limit_error("max_objects", "the scene has " + std::to_string(objects) +
                                           " objects; the limit is " + std::to_string(s.max_objects));
+  double work = static_cast<double>(pixels) * o.spp * (o.max_depth + 1);
+  if (work > s.max_work)
+    return limit_error("max_work", "pixels x spp x (max_depth + 1) is " + format_number(work) +
+                                       "; the limit is " + format_number(s.max_work));
   if (scene.lights.size() > static_cast<size_t>(s.max_lights))
     return limit_error("max_lights", "the scene has " + std::to_string(scene.lights.size()) +
                                          " lights; the limit is " + std::to_string(s.max_lights));

@@ -27,6 +27,8 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   add("--max-depth", s.max_depth, "largest max_depth")->check(CLI::Range(0, 100000));
   add("--max-objects", s.max_objects, "most spheres and planes in a scene")->check(CLI::Range(0, 100000000));
   add("--max-lights", s.max_lights, "most lights in a scene")->check(CLI::Range(0, 1000000));
+  add("--max-work", s.max_work, "most pixels x spp x (max_depth + 1) in one job")
+      ->check(CLI::Range(1.0, 1e18));
   add("--job-timeout", s.job_timeout, "seconds a job may render (0: no limit)")
       ->check(CLI::Range(0.0, 1e9));
   add("--results-dir", s.results_dir, "directory for results and queued jobs (survive restarts)");

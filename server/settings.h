@@ -19,6 +19,7 @@ struct Settings {
   int max_depth = 64;
   int max_objects = 1000000;
   int max_lights = 1000;
+  double max_work = 8e9;  // pixels x spp x (max_depth + 1): the most ray paths a job may ask for
   double job_timeout = 600;  // seconds; 0: none
   std::string results_dir;   // empty: keep results in memory only
   std::uint64_t cache_bytes = 256ULL << 20;

@@ -243,6 +243,17 @@ std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOpt
     }
     return nullptr;
   }
+  // Bounds on what one process can hold: the image, and with spp > 1 the per-pixel sums.
+  const Camera& cam = scene.cameras[*camera];
+  const long long pixels = static_cast<long long>(options.width > 0 ? options.width : cam.width) *
+                           (options.height > 0 ? options.height : cam.height);
+  const long long limit = options.spp > 1 ? kMaxSupersampledPixels : kMaxPixels;
+  if (pixels > limit) {
+    if (error)
+      *error = "the image has " + std::to_string(pixels) + " pixels; at most " +
+               std::to_string(limit) + (options.spp > 1 ? " with spp > 1" : "") + " can be rendered";
+    return nullptr;
+  }
   const Clock::time_point t0 = Clock::now();
   if (options.precision == Precision::f32) {
     auto prepared = prepare_scene<float>(scene, options, *camera);

@@ -35,6 +35,11 @@ struct RenderStats {
   double progress() const;  // 0..1
 };
 
+// The largest images a job accepts (the image, and with spp > 1 also 48 bytes of sums per
+// pixel, must fit in memory).
+constexpr long long kMaxPixels = 1LL << 28;
+constexpr long long kMaxSupersampledPixels = 1LL << 25;
+
 class RenderJob {
  public:
   // Prepares the scene for these options. Returns nullptr with `error` set when the options
