@@ -31,6 +31,10 @@ TEST(FuzzRegressions, ModelParserInputsReplayCleanly) {
 
 TEST(FuzzRegressions, JsonSceneInputsReplayCleanly) { replay("json_scene", fuzz::json_scene); }
 
+TEST(FuzzRegressions, ImageDecodeInputsReplayCleanly) {
+  replay("image_decode", fuzz::image_decode);
+}
+
 TEST(FuzzRegressions, HttpRequestInputsReplayCleanly) {
   replay("http_request", fuzz::http_request);
 }

@@ -9,13 +9,14 @@ build=build-fuzz
 CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DRAYFARM_FUZZ=ON -DRAYFARM_BUILD_TESTS=OFF \
   -DRAYFARM_SANITIZE=fuzzer-no-link,address,undefined >/dev/null
-cmake --build "$build" -j2 --target fuzz_model_parser fuzz_json_scene fuzz_http_request
-for target in model_parser json_scene http_request; do
+cmake --build "$build" -j2 --target fuzz_model_parser fuzz_json_scene fuzz_image_decode fuzz_http_request
+for target in model_parser json_scene image_decode http_request; do
   corpus="$build/corpus-$target"
   mkdir -p "$corpus"
   case $target in
     model_parser) cp scenes/*.txt scenes/extreme/*.txt "$corpus"/ ;;
     json_scene) cp scenes/*.json "$corpus"/ 2>/dev/null || true ;;
+    image_decode) cp tests/fuzz/corpus/image_decode/* "$corpus"/ ;;
     http_request) cp tests/fuzz/corpus/http_request/* "$corpus"/ ;;
   esac
   cp tests/fuzz/regressions/$target/* "$corpus"/ 2>/dev/null || true

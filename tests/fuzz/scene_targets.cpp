@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "rayfarm/image_io.h"
 #include "rayfarm/json_scene.h"
 #include "rayfarm/lint.h"
 #include "rayfarm/load.h"
@@ -85,6 +86,20 @@ int json_scene(const std::uint8_t* data, std::size_t size) {
   if (!scene) return 0;
   (void)write_pov(*scene, RenderOptions{});
   if (scene->spheres.size() + scene->planes.size() < 64) tiny_render(*scene);
+  return 0;
+}
+
+int image_decode(const std::uint8_t* data, std::size_t size) {
+  std::string error;
+  auto image = decode_image(std::string_view(reinterpret_cast<const char*>(data), size), &error);
+  check(image.has_value() || !error.empty(), "a failed decode without a message");
+  if (!image || image->width == 0) return 0;
+  for (ImageFormat f : {ImageFormat::png, ImageFormat::ppm}) {
+    auto bytes = encode_image(*image, f);
+    auto again = decode_image(std::string_view(reinterpret_cast<const char*>(bytes.data()),
+                                               bytes.size()), &error);
+    check(again.has_value() && *again == *image, "an image changed in a round trip");
+  }
   return 0;
 }
 

@@ -11,6 +11,8 @@ namespace rayfarm::fuzz {
 int model_parser(const std::uint8_t* data, std::size_t size);
 // JSON scene parse + validate + prepare + a tiny render.
 int json_scene(const std::uint8_t* data, std::size_t size);
+// PNG/PPM decoding (uploads to /compare); a decoded image survives PNG and PPM round trips.
+int image_decode(const std::uint8_t* data, std::size_t size);
 // Raw bytes as an HTTP request to an in-process rayfarmd: never a 500, never a hang.
 int http_request(const std::uint8_t* data, std::size_t size);
 
