@@ -1,9 +1,10 @@
-// The HTTP API of SPEC §5 on cpp-httplib, with the library's known weaknesses closed here:
-// chunked and compressed uploads refused (they bypass the payload limit), also before a
-// `100 Continue`, multi-range requests refused, exceptions answered with a generic JSON 500,
-// the client address taken from the socket only, path length bounded, and a connection pool
-// sized so that waiting clients cannot starve health and status requests. The request head
-// limits and the connection loop are in connection.h.
+// The HTTP API of SPEC §5 on cpp-httplib: each route's path bound to its handler (routes.h),
+// and the library's known weaknesses closed: chunked and compressed uploads refused (they
+// bypass the payload limit), also before a `100 Continue`, multi-range requests refused,
+// exceptions answered with a generic JSON 500, the client address taken from the socket only,
+// path length bounded, and a connection pool sized so that waiting clients cannot starve
+// health and status requests. The request head limits and the connection loop are in
+// connection.h.
 #pragma once
 
 #include <httplib.h>

@@ -1,6 +1,7 @@
 // The render service without HTTP: accepting jobs (checked, limited, durable), the job
 // table, results and their cache, expiry, samples, health and metrics. The HTTP layer
-// (http_api.cpp) only translates requests to these calls.
+// (http_api.cpp, routes_*.cpp) only translates requests to these calls. Its parts:
+// submission.cpp, results.cpp, samples.cpp, recovery.cpp (restart), expiry.cpp.
 #pragma once
 
 #include <atomic>
@@ -16,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "api_error.h"
 #include "image_cache.h"
 #include "job.h"
 #include "metrics.h"
@@ -24,22 +26,6 @@
 #include "store.h"
 
 namespace rayfarm::server {
-
-// An error as the API answers it: status, code, message, and where when known.
-struct ApiError {
-  int status = 0;  // 0: no error
-  std::string code;
-  std::string message;
-  int line = 0;
-  int column = 0;
-  std::string path;   // JSON path
-  std::string limit;  // the limit's name, for 422
-  int retry_after = 0;
-  nlohmann::json details;  // e.g. all errors of a scene
-
-  explicit operator bool() const { return status != 0; }
-  nlohmann::json body() const;
-};
 
 using Params = std::vector<std::pair<std::string, std::string>>;
 

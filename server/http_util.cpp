@@ -1,0 +1,89 @@
+// Responses, query parameters and client identity shared by the routes.
+#include "http_util.h"
+
+#include <cmath>
+#include <mutex>
+
+#include "rayfarm/image_io.h"
+#include "rayfarm/sha256.h"
+
+namespace rayfarm::server {
+
+using httplib::Request;
+using httplib::Response;
+
+void send_json(Response& res, int status, const nlohmann::json& body) {
+  res.status = status;
+  res.set_content(json_text(body) + "\n", "application/json");
+}
+
+void send_error(Response& res, const ApiError& e) {
+  if (e.retry_after > 0) res.set_header("Retry-After", std::to_string(e.retry_after));
+  send_json(res, e.status, e.body());
+}
+
+void send_error(Response& res, int status, const std::string& code, const std::string& message) {
+  send_error(res, api_error(status, code, message));
+}
+
+void send_image(Response& res, const Image& image, bool ppm) {
+  auto bytes = encode_image(image, ppm ? ImageFormat::ppm : ImageFormat::png);
+  res.status = 200;
+  res.set_content(reinterpret_cast<const char*>(bytes.data()), bytes.size(),
+                  ppm ? "image/x-portable-pixmap" : "image/png");
+}
+
+bool send_result(Service& service, const Request& req, Response& res, const Job& job) {
+  auto png = service.result_png(job);
+  if (!png) return false;
+  std::string etag = "\"" + job.image_name + (wants_ppm(req, job) ? "-ppm" : "") + "\"";
+  res.set_header("ETag", etag);
+  res.set_header("Cache-Control", "private, max-age=86400");
+  res.set_header("X-Job-Id", job.id);
+  {
+    std::lock_guard lock(job.mu);
+    res.set_header("X-Render-Ms", std::to_string(std::llround(job.stats.render_ms)));
+    res.set_header("X-Cache", job.cache_hit ? "hit" : "miss");
+  }
+  if (req.get_header_value("If-None-Match") == etag) {
+    res.status = 304;
+    return true;
+  }
+  if (wants_ppm(req, job)) {
+    std::string error;
+    auto image = decode_image(*png, &error);
+    if (!image) return false;
+    send_image(res, *image, true);
+    return true;
+  }
+  res.status = 200;
+  res.set_content(*png, "image/png");
+  return true;
+}
+
+bool wants_ppm(const Request& req, const Job& job) {
+  if (req.has_param("format")) return req.get_param_value("format") == "ppm";
+  return job.options.format == ImageFormat::ppm;
+}
+
+bool param_true(const Request& req, const char* name) {
+  if (!req.has_param(name)) return false;
+  std::string v = req.get_param_value(name);
+  return v == "1" || v == "true" || v == "yes";
+}
+
+std::string bearer_token(const Request& req) {
+  std::string auth = req.get_header_value("Authorization");
+  const std::string prefix = "Bearer ";
+  if (auth.size() > prefix.size() && auth.compare(0, prefix.size(), prefix) == 0)
+    return auth.substr(prefix.size());
+  return {};
+}
+
+std::string client_of(const Request& req) {
+  std::string token = bearer_token(req);
+  if (!token.empty()) return "token:" + sha256_hex(token).substr(0, 16);
+  return "addr:" + req.remote_addr;
+}
+
+}  // namespace rayfarm::server

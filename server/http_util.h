@@ -1,0 +1,35 @@
+// What every route needs: JSON, error and image responses, a finished job's result with its
+// caching headers, the query parameters read the same way everywhere, and who is asking.
+#pragma once
+
+#include <httplib.h>
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "job.h"
+#include "service.h"
+
+namespace rayfarm::server {
+
+void send_json(httplib::Response& res, int status, const nlohmann::json& body);
+void send_error(httplib::Response& res, const ApiError& e);
+void send_error(httplib::Response& res, int status, const std::string& code,
+                const std::string& message);
+void send_image(httplib::Response& res, const Image& image, bool ppm);
+// Sends a finished job's result with its caching headers; false when it has expired.
+bool send_result(Service& service, const httplib::Request& req, httplib::Response& res,
+                 const Job& job);
+
+// ?format=ppm, else the format the job was submitted with.
+bool wants_ppm(const httplib::Request& req, const Job& job);
+// ?NAME=1, true or yes.
+bool param_true(const httplib::Request& req, const char* name);
+
+// The token of an `Authorization: Bearer` header; empty when there is none.
+std::string bearer_token(const httplib::Request& req);
+// Who is asking: the bearer token's digest, else the socket's address (never a header).
+std::string client_of(const httplib::Request& req);
+
+}  // namespace rayfarm::server

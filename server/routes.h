@@ -1,0 +1,31 @@
+// The handlers of the API's routes (SPEC §5), one function each, named after method and path;
+// HttpApi binds them to their paths.
+#pragma once
+
+#include <httplib.h>
+
+#include "service.h"
+
+namespace rayfarm::server {
+
+using RouteHandler = void (*)(Service&, const httplib::Request&, httplib::Response&);
+
+// routes_render.cpp
+void post_render(Service& svc, const httplib::Request& req, httplib::Response& res);
+
+// routes_jobs.cpp
+void get_job(Service& svc, const httplib::Request& req, httplib::Response& res);
+void delete_job(Service& svc, const httplib::Request& req, httplib::Response& res);
+void get_job_image(Service& svc, const httplib::Request& req, httplib::Response& res);
+void get_job_events(Service& svc, const httplib::Request& req, httplib::Response& res);
+void get_jobs(Service& svc, const httplib::Request& req, httplib::Response& res);
+
+// routes_compare.cpp
+void post_compare(Service& svc, const httplib::Request& req, httplib::Response& res);
+
+// routes_info.cpp
+void get_samples(Service& svc, const httplib::Request& req, httplib::Response& res);
+void get_healthz(Service& svc, const httplib::Request& req, httplib::Response& res);
+void get_metrics(Service& svc, const httplib::Request& req, httplib::Response& res);
+
+}  // namespace rayfarm::server

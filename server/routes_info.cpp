@@ -1,0 +1,28 @@
+// What the service offers and how it is: GET /samples, /healthz and /metrics.
+#include "http_util.h"
+#include "routes.h"
+
+namespace rayfarm::server {
+
+using httplib::Request;
+using httplib::Response;
+using Json = nlohmann::json;
+
+void get_samples(Service& svc, const Request&, Response& res) {
+  Json list = Json::array();
+  for (const Sample& s : svc.samples())
+    list.push_back({{"name", s.name},
+                    {"description", s.description},
+                    {"render", "/render?sample=" + s.name}});
+  send_json(res, 200, {{"samples", list}});
+}
+
+void get_healthz(Service& svc, const Request&, Response& res) {
+  send_json(res, svc.shutting_down() ? 503 : 200, svc.health());
+}
+
+void get_metrics(Service& svc, const Request&, Response& res) {
+  res.set_content(svc.metrics_text(), "text/plain; version=0.0.4");
+}
+
+}  // namespace rayfarm::server

@@ -1,0 +1,108 @@
+// POST /render: a scene from the body, a multipart 'scene' part or ?sample=NAME, queued, and
+// with ?wait=1 answered with the result once the job ends.
+#include <chrono>
+#include <fstream>
+#include <mutex>
+#include <set>
+
+#include "http_util.h"
+#include "routes.h"
+
+namespace rayfarm::server {
+namespace {
+
+using httplib::Request;
+using httplib::Response;
+using Json = nlohmann::json;
+
+const std::set<std::string> kControlParams = {"wait", "sample"};
+
+// ?wait=1: holds the request until the job ends and answers with its result or error. False
+// when it has not answered (no waiting slot free, or shutting down).
+bool answer_when_final(Service& svc, const Request& req, Response& res, Job& job) {
+  if (!svc.acquire_waiter()) {
+    res.set_header("X-Wait", "unavailable");
+    return false;
+  }
+  struct Release {
+    Service& s;
+    ~Release() { s.release_waiter(); }
+  } release{svc};
+  std::unique_lock lock(job.mu);
+  while (!is_final(job.state) && !svc.stopped())
+    job.changed.wait_for(lock, std::chrono::milliseconds(500));
+  JobState state = job.state;
+  std::string code = job.error_code, message = job.error;
+  lock.unlock();
+  if (state == JobState::done) {
+    if (!send_result(svc, req, res, job))
+      send_error(res, 410, "expired", "the result has already expired");
+    return true;
+  }
+  if (state == JobState::canceled) {
+    send_error(res, 410, "canceled", "the job was canceled");
+    return true;
+  }
+  if (state == JobState::failed) {
+    ApiError e;
+    e.status = code == "timeout" ? 422 : code == "storage_error" ? 503 : 500;
+    e.code = code.empty() ? "render_failed" : code;
+    e.message = message;
+    if (code == "timeout") e.limit = "job_timeout";
+    send_error(res, e);
+    return true;
+  }
+  // Shutting down: the job is persisted and the client can poll for it.
+  return false;
+}
+
+}  // namespace
+
+void post_render(Service& svc, const Request& req, Response& res) {
+  std::string text;
+  if (req.has_param("sample")) {
+    const Sample* sample = svc.sample(req.get_param_value("sample"));
+    if (!sample) {
+      std::string names;
+      for (const Sample& s : svc.samples()) names += (names.empty() ? "" : ", ") + s.name;
+      return send_error(res, 404, "unknown_sample",
+                        "no sample named '" + req.get_param_value("sample").substr(0, 64) +
+                            "'; samples: " + names);
+    }
+    std::ifstream in(sample->path, std::ios::binary);
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  } else if (req.is_multipart_form_data()) {
+    if (!req.has_file("scene"))
+      return send_error(res, 400, "missing_scene", "multipart upload without a 'scene' part");
+    text = req.get_file_value("scene").content;
+  } else {
+    text = req.body;
+  }
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    return send_error(res, 400, "empty_scene",
+                      "the request has no scene: send a model file or a JSON scene as the body");
+  Params params;
+  for (auto& [k, v] : req.params)
+    if (!kControlParams.count(k)) params.emplace_back(k, v);
+  Submitted sub = svc.submit(text, params, client_of(req));
+  if (sub.error) return send_error(res, sub.error);
+  auto& job = *sub.job;
+
+  if (param_true(req, "wait") && answer_when_final(svc, req, res, job)) return;
+  JobState state;
+  {
+    std::lock_guard lock(job.mu);  // a worker may be starting it
+    state = job.state;
+  }
+  Json body = {{"id", job.id},
+               {"state", to_string(state)},
+               {"queue_position", svc.queue_position(job)},
+               {"links",
+                {{"self", "/jobs/" + job.id},
+                 {"image", "/jobs/" + job.id + "/image"},
+                 {"events", "/jobs/" + job.id + "/events"}}}};
+  res.set_header("Location", "/jobs/" + job.id);
+  send_json(res, 202, body);
+}
+
+}  // namespace rayfarm::server

@@ -1,0 +1,55 @@
+// The sample scenes offered by GET /samples and /render?sample=NAME: each .txt or .json file
+// of the samples directory that loads, described by its first comment.
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+
+#include "rayfarm/load.h"
+#include "service.h"
+
+namespace rayfarm::server {
+namespace fs = std::filesystem;
+namespace {
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+}  // namespace
+
+const Sample* Service::sample(const std::string& name) const {
+  for (const Sample& s : samples_)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+void Service::load_samples() {
+  fs::path dir = settings_.samples_dir;
+  std::error_code ec;
+  if (dir.empty() || !fs::is_directory(dir, ec)) return;
+  for (auto& e : fs::directory_iterator(dir, ec)) {
+    auto ext = e.path().extension();
+    if (ext != ".txt" && ext != ".json") continue;
+    std::string name = e.path().stem().string();
+    if (ext == ".json") name += ".json";
+    std::string text = read_text(e.path());
+    std::string description;
+    std::istringstream lines(text);
+    std::string line;
+    while (std::getline(lines, line)) {
+      size_t hash = line.find('#');
+      if (hash == std::string::npos) continue;
+      description = line.substr(hash + 1);
+      while (!description.empty() && description.front() == ' ') description.erase(0, 1);
+      break;
+    }
+    if (!load_scene(text).scene) continue;  // only scenes that render are offered
+    samples_.push_back({name, description, e.path()});
+  }
+  std::sort(samples_.begin(), samples_.end(), [](auto& a, auto& b) { return a.name < b.name; });
+}
+
+}  // namespace rayfarm::server

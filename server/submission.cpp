@@ -1,0 +1,196 @@
+// Accepting a job: the per-client and queue limits, the scene and its options checked, the
+// render limits, the content-addressed cache, and the job on disk before it is queued.
+#include <cstdint>
+#include <random>
+
+#include "rayfarm/load.h"
+#include "rayfarm/sha256.h"
+#include "rayfarm/writers.h"
+#include "service.h"
+
+namespace rayfarm::server {
+
+std::string random_id() {
+  static thread_local std::random_device device;
+  static const char* kHex = "0123456789abcdef";
+  std::string id;
+  for (int i = 0; i < 4; ++i) {
+    std::uint32_t v = device();
+    for (int s = 28; s >= 0; s -= 4) id += kHex[(v >> s) & 15];
+  }
+  return id;
+}
+
+namespace {
+
+ApiError limit_error(const std::string& limit, const std::string& message) {
+  ApiError e = api_error(422, "limit_exceeded", message);
+  e.limit = limit;
+  return e;
+}
+
+ApiError scene_error(const Diagnostics& diags) {
+  const Diagnostic* first = diags.first_error();
+  ApiError e = api_error(400, "invalid_scene", first ? first->message : "invalid scene");
+  if (first) {
+    e.line = first->where.line;
+    e.column = first->where.column;
+    e.path = first->where.path;
+  }
+  e.details = nlohmann::json::array();
+  for (const Diagnostic& d : diags.items()) {
+    if (d.severity != Severity::error) continue;
+    nlohmann::json item = {{"code", d.code}, {"message", d.message}};
+    if (d.where.line > 0) {
+      item["line"] = d.where.line;
+      item["column"] = d.where.column;
+    }
+    if (!d.where.path.empty()) item["path"] = d.where.path;
+    e.details.push_back(item);
+  }
+  return e;
+}
+
+// The cache key: the scene as parsed (so layout and comments do not matter, and a model file
+// and its JSON twin share results) and every option that changes pixels.
+std::string content_key(const SceneDesc& desc, RenderOptions options) {
+  options.format = ImageFormat::png;
+  return sha256_hex(write_json(desc) + "\n" + canonical_string(options)).substr(0, 40);
+}
+
+}  // namespace
+
+std::shared_ptr<Job> Service::new_job(const std::string& client) {
+  auto job = std::make_shared<Job>();
+  job->id = random_id();
+  job->client = client;
+  job->created_ms = now_ms();
+  std::lock_guard lock(mu_);
+  job->sequence = ++sequence_;
+  return job;
+}
+
+Submitted Service::submit(const std::string& scene_text, const Params& params,
+                          const std::string& client) {
+  if (shutting_down_) {
+    ApiError e = api_error(503, "shutting_down", "the server is shutting down; try again shortly");
+    e.retry_after = 5;
+    return {nullptr, e};
+  }
+  if (scheduler_->waiting() + scheduler_->active() >=
+      static_cast<size_t>(settings_.queue_capacity)) {
+    metrics_.rejected("queue_full");
+    ApiError e = api_error(429, "queue_full",
+                           "the render queue is full (" + std::to_string(settings_.queue_capacity) +
+                               " jobs); try again later");
+    e.retry_after = 2;
+    return {nullptr, e};
+  }
+  {
+    std::lock_guard lock(mu_);
+    int mine = 0;
+    for (auto& [id, j] : jobs_) {
+      std::lock_guard jl(j->mu);
+      mine += j->client == client && !is_final(j->state);
+    }
+    if (mine >= settings_.max_jobs_per_client) {
+      metrics_.rejected("client_limit");
+      ApiError e = api_error(
+          429, "too_many_jobs",
+          "you have " + std::to_string(mine) + " jobs queued or running; wait for some to finish");
+      e.retry_after = 2;
+      return {nullptr, e};
+    }
+  }
+
+  LoadedScene loaded = load_scene(scene_text);
+  if (!loaded.scene) return {nullptr, scene_error(loaded.diags)};
+  auto scene = std::make_shared<const Scene>(std::move(*loaded.scene));
+
+  RenderOptions options;
+  Diagnostics diags;
+  apply_options(options, scene->render, diags);
+  OptionSet query;
+  for (auto& [k, v] : params) query.push_back({k, v, {0, 0, k}});
+  apply_options(options, query, diags);
+  if (diags.has_errors()) {
+    const Diagnostic* d = diags.first_error();
+    ApiError e = api_error(400, "invalid_option", d->message);
+    e.path = d->where.path;
+    return {nullptr, e};
+  }
+  auto camera = scene->find_camera(options.camera);
+  if (!camera)
+    return {nullptr, api_error(400, "invalid_option", "no camera named '" + options.camera + "'")};
+  const Camera& cam = scene->cameras[*camera];
+  int width = options.width > 0 ? options.width : cam.width;
+  int height = options.height > 0 ? options.height : cam.height;
+  if (ApiError e = check_limits(*scene, options, width, height)) {
+    metrics_.rejected(e.limit);
+    return {nullptr, e};
+  }
+
+  auto job = new_job(client);
+  job->scene_text = scene_text;
+  job->scene = scene;
+  job->options = options;
+  job->width = width;
+  job->height = height;
+  // A time limit makes the result depend on the machine's speed: never shared.
+  if (options.time_limit == 0) job->cache_key = content_key(loaded.desc, options);
+  job->image_name = job->cache_key.empty() ? job->id : job->cache_key;
+
+  bool hit = !job->cache_key.empty() &&
+             (cache_.get(job->cache_key) || store_.has_image(job->cache_key));
+  if (hit) {
+    std::lock_guard jl(job->mu);
+    job->state = JobState::done;
+    job->cache_hit = true;
+    job->started_ms = job->finished_ms = job->created_ms;
+    job->stats.finished = true;
+    job->stats.spp_target = job->stats.spp_done = options.spp;
+  }
+  if (!job->cache_key.empty()) metrics_.cache(hit);
+  try {
+    if (!hit) store_.save_scene(job->id, scene_text);
+    store_.save_record(*job);
+  } catch (const std::exception& ex) {
+    ApiError e = api_error(503, "storage_error", std::string("cannot store the job: ") + ex.what());
+    e.retry_after = 10;
+    return {nullptr, e};
+  }
+  {
+    std::lock_guard lock(mu_);
+    jobs_[job->id] = job;
+  }
+  if (!hit) scheduler_->submit(job);
+  return {job, {}};
+}
+
+ApiError Service::check_limits(const Scene& scene, const RenderOptions& o, int width, int height) {
+  const Settings& s = settings_;
+  long long pixels = static_cast<long long>(width) * height;
+  if (pixels > s.max_pixels)
+    return limit_error("max_pixels", "the image has " + std::to_string(pixels) +
+                                         " pixels; the limit is " + std::to_string(s.max_pixels));
+  if (o.spp > s.max_spp)
+    return limit_error("max_spp", "spp " + std::to_string(o.spp) + " is over the limit of " +
+                                      std::to_string(s.max_spp));
+  if (o.max_depth > s.max_depth)
+    return limit_error("max_depth", "max_depth " + std::to_string(o.max_depth) +
+                                        " is over the limit of " + std::to_string(s.max_depth));
+  size_t objects = scene.spheres.size() + scene.planes.size();
+  if (objects > static_cast<size_t>(s.max_objects))
+    return limit_error("max_objects", "the scene has " + std::to_string(objects) +
+                                          " objects; the limit is " + std::to_string(s.max_objects));
+  double work = static_cast<double>(pixels) * o.spp * (o.max_depth + 1);
+  if (work > s.max_work)
+    return limit_error("max_work", "pixels x spp x (max_depth + 1) is " + format_number(work) +
+                                       "; the limit is " + format_number(s.max_work));
+  if (scene.lights.size() > static_cast<size_t>(s.max_lights))
+    return limit_error("max_lights", "the scene has " + std::to_string(scene.lights.size()) +
+                                         " lights; the limit is " + std::to_string(s.max_lights));
+  return {};
+}
+
+}  // namespace rayfarm::server
