@@ -56,18 +56,7 @@ Runner add_compare(CLI::App& app) {
       if (!write_output(args->diff, png.data(), png.size())) return kInputError;
     }
     if (args->json) {
-      nlohmann::json j = {{"width", r->width},
-                          {"height", r->height},
-                          {"rmse", r->rmse},
-                          {"psnr", std::isinf(r->psnr) ? nlohmann::json(nullptr) : nlohmann::json(r->psnr)},
-                          {"identical", r->max_abs == 0},
-                          {"max_abs", r->max_abs},
-                          {"mean_abs", r->mean_abs},
-                          {"differing_pixels", r->differing_pixels},
-                          {"differing_fraction", r->differing_fraction},
-                          {"off_by_more_than_1", r->off_by_more_than_1},
-                          {"threshold", options.threshold},
-                          {"neighborhood", options.neighborhood}};
+      nlohmann::json j = compare_json(*r, options);
       std::cout << j.dump(2) << "\n";
     } else {
       std::printf("size              %dx%d\n", r->width, r->height);

@@ -68,18 +68,7 @@ void post_compare(Service& svc, const Request& req, Response& res) {
   auto result = compare_images(*a, *b, options, &error);
   if (!result) return send_error(res, 422, "size_mismatch", error);
   if (param_true(req, "diff")) return send_image(res, diff_image(*a, *b, options), false);
-  Json body = {{"width", result->width},
-               {"height", result->height},
-               {"rmse", result->rmse},
-               {"psnr", std::isinf(result->psnr) ? Json(nullptr) : Json(result->psnr)},
-               {"identical", result->max_abs == 0},
-               {"max_abs", result->max_abs},
-               {"mean_abs", result->mean_abs},
-               {"differing_pixels", result->differing_pixels},
-               {"differing_fraction", result->differing_fraction},
-               {"off_by_more_than_1", result->off_by_more_than_1},
-               {"threshold", options.threshold},
-               {"neighborhood", options.neighborhood}};
+  Json body = compare_json(*result, options);
   if (!job_id.empty()) body["reference_job"] = job_id;
   send_json(res, 200, body);
 }

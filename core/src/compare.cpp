@@ -113,4 +113,20 @@ Image diff_image(const Image& a, const Image& b, const CompareOptions& options) 
   return out;
 }
 
+nlohmann::json compare_json(const CompareResult& r, const CompareOptions& options) {
+  using Json = nlohmann::json;
+  return {{"width", r.width},
+          {"height", r.height},
+          {"rmse", r.rmse},
+          {"psnr", std::isinf(r.psnr) ? Json(nullptr) : Json(r.psnr)},
+          {"identical", r.max_abs == 0},
+          {"max_abs", r.max_abs},
+          {"mean_abs", r.mean_abs},
+          {"differing_pixels", r.differing_pixels},
+          {"differing_fraction", r.differing_fraction},
+          {"off_by_more_than_1", r.off_by_more_than_1},
+          {"threshold", options.threshold},
+          {"neighborhood", options.neighborhood}};
+}
+
 }  // namespace rayfarm

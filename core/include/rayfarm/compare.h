@@ -4,6 +4,8 @@
 #include <optional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "rayfarm/image.h"
 
 namespace rayfarm {
@@ -29,6 +31,9 @@ struct CompareResult {
 // nullopt (with `error`) when the sizes differ.
 std::optional<CompareResult> compare_images(const Image& a, const Image& b,
                                             const CompareOptions& options, std::string* error);
+
+// The metrics as the API and `rayfarm compare --json` give them (PSNR null when identical).
+nlohmann::json compare_json(const CompareResult& result, const CompareOptions& options);
 
 // Per-pixel heat map: black where equal, rising through blue/red/yellow with the largest
 // channel difference; pixels over the threshold are never darker than a visible minimum.
