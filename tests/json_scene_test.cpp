@@ -12,65 +12,13 @@
 #include <vector>
 
 #include "rayfarm/load.h"
+#include "test_util.h"
 
 namespace rayfarm {
 namespace {
 
-constexpr std::string_view kLectureModel = R"(camera cam1
-{
-   pixeldim  800 600
-   worlddim  8 6
-   viewpoint 4 3 5
-}
-material chrome
-{  ambient  3 3 3
-   diffuse  .1 .1 .1
-   specular .9 .9 .9
-}
-material red
-{  ambient  6 1 1
-   diffuse  .8 .1 .1
-   specular 0 0 0
-}
-material blue
-{  ambient  1 1 6
-   diffuse  .1 .2 .8
-   specular .2 .2 .2
-   shininess 8
-}
-material floor
-{  ambient  2 2 2
-   diffuse  .5 .5 .5
-}
-light top
-{  location   2.56 3.80 -1.5
-   emissivity 4 4 4
-}
-light side
-{  location   7 5 1
-   emissivity 3 3 3
-}
-sphere left
-{  material chrome
-   center   1.25 .75 -4
-   radius   .9
-}
-sphere middle
-{  material red
-   center   4 1.2 -5
-   radius   1.2
-}
-sphere right
-{  material blue
-   center   6.5 1 -3.5
-   radius   1
-}
-plane ground
-{  material floor
-   normal   0 1 0
-   point    0 -0.2 0
-}
-)";
+// The lecture scene, as bundled in scenes/.
+const std::string kLectureModel = test::lecture_scene();
 
 constexpr std::string_view kLectureJson = R"({
   "cameras": {"cam1": {"pixeldim": [800, 600], "worlddim": [8, 6], "viewpoint": [4, 3, 5]}},

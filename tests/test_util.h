@@ -5,12 +5,22 @@
 
 #include <array>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "rayfarm/load.h"
 #include "rayfarm/render.h"
 
 namespace rayfarm::test {
+
+// The lecture scene (scenes/cho.txt), the one scene every module is checked against.
+inline std::string lecture_scene() {
+  std::ifstream in(RAYFARM_SOURCE_DIR "/scenes/cho.txt", std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
 
 inline Scene scene_from(const std::string& text) {
   LoadedScene loaded = load_scene(text);
