@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <thread>
 
 namespace rayfarm {
 namespace {
@@ -31,11 +32,33 @@ std::vector<std::string> Features::parts() const {
   if (highlight) out.push_back("highlight");
   if (reflection) out.push_back("reflection");
   if (supersampling) out.push_back("supersampling");
+  if (bvh) out.push_back("bvh");
   return out;
 }
 
 template <class T>
-PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera) {
+void build_sphere_bvh(PreparedScene<T>& p, int threads) {
+  std::vector<BvhBox> boxes;
+  boxes.reserve(p.spheres.size());
+  for (const PreparedSphere<T>& s : p.spheres) {
+    const glm::dvec3 c(s.centre);
+    const double r = static_cast<double>(s.radius);
+    boxes.push_back({c - r, c + r});
+  }
+  BvhBuildOptions build;
+  build.threads =
+      threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  p.bvh = build_bvh(boxes, build);
+  p.bvh_spheres.clear();
+  if (p.bvh.empty()) return;  // coordinates out of the nodes' range: keep the loop
+  p.bvh_spheres.reserve(p.spheres.size());
+  for (std::int32_t i : p.bvh.order)
+    p.bvh_spheres.push_back({p.spheres[i].centre, p.spheres[i].radius, i});
+}
+
+template <class T>
+PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera,
+                               int build_threads) {
   const Camera& cam = scene.cameras.at(camera);
   PreparedScene<T> p;
   p.width = options.width > 0 ? options.width : cam.width;
@@ -82,6 +105,14 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     f.shadows = options.shadows && f.lights;
     f.highlight = f.lights && reflective;
     f.reflection = reflective && options.max_depth > 0;
+    // Without diffuse or highlight a light adds exact zeros (while E/r is finite, which the
+    // tracer checks): it needs no shadow ray.
+    for (size_t i = 0; i < p.materials.size(); ++i)
+      p.materials[i].lit =
+          nonzero(scene.materials[i].diffuse) || (f.highlight && p.materials[i].highlights);
+    // The reference (unspecialized) path always loops, so tests compare the two.
+    if (p.spheres.size() >= kBvhMinSpheres) build_sphere_bvh(p, build_threads);
+    f.bvh = !p.bvh.empty();
   } else {
     f.lights = true;
     f.shadows = options.shadows;
@@ -93,7 +124,9 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   return p;
 }
 
-template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOptions&, int);
-template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int);
+template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOptions&, int, int);
+template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int, int);
+template void build_sphere_bvh<float>(PreparedScene<float>&, int);
+template void build_sphere_bvh<double>(PreparedScene<double>&, int);
 
 }  // namespace rayfarm

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "bvh.h"
 #include "rayfarm/intersect.h"
 #include "rayfarm/options.h"
 #include "rayfarm/scene.h"
@@ -18,6 +19,7 @@ struct Features {
   bool shadows = true;     // shadow rays: option on, lights and objects present
   bool lights = true;      // any light contributes at all
   bool supersampling = false;
+  bool bvh = false;  // spheres behind a hierarchy instead of a loop
 
   std::vector<std::string> parts() const;
 };
@@ -29,6 +31,7 @@ struct PreparedMaterial {
   T max_specular;  // largest specular channel: the weight of its reflection
   bool reflects;
   bool highlights;
+  bool lit = true;  // lights can add anything: some diffuse, or a highlight
 };
 
 template <class T>
@@ -36,6 +39,14 @@ struct PreparedSphere {
   Vec3<T> centre;
   T radius;
   int material;
+};
+
+// A sphere in the hierarchy's leaf order, with its index in the scene.
+template <class T>
+struct BvhSphere {
+  Vec3<T> centre;
+  T radius;
+  int index;
 };
 
 template <class T>
@@ -71,10 +82,22 @@ struct PreparedScene {
   std::vector<PreparedPlane<T>> planes;
   std::vector<PreparedLight<T>> lights;
   Features features;
+
+  Bvh bvh;                                // empty: spheres are tested in a plain loop
+  std::vector<BvhSphere<T>> bvh_spheres;  // the spheres in bvh.order
 };
 
+// Below this many spheres a plain loop beats the hierarchy (tests/bench: BM_Closest*).
+inline constexpr std::size_t kBvhMinSpheres = 8;
+
 // Converts a checked scene for rendering. `camera` is an index into scene.cameras.
+// `build_threads` (0: all cores) only changes how fast the hierarchy is built, never it.
 template <class T>
-PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera);
+PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera,
+                               int build_threads = 0);
+
+// Puts the spheres behind a hierarchy (whatever their number); used by prepare_scene.
+template <class T>
+void build_sphere_bvh(PreparedScene<T>& scene, int threads);
 
 }  // namespace rayfarm

@@ -36,6 +36,19 @@ struct Origin {
   bool inside = false;
 };
 
+// Where a ray leaving `from` meets sphere `index`, or a value that is not > 0. The one
+// sphere test of both the loop and the hierarchy, so the two agree to the bit.
+template <class T>
+[[gnu::always_inline, gnu::flatten]] inline T sphere_t(const Vec3<T>& o, const Vec3<T>& d,
+                                                       const Vec3<T>& centre, T radius, int index,
+                                                       Origin from) {
+  const bool own = index == from.object;
+  if (own && !from.inside) return T(-1);
+  auto roots = sphere_roots(o, d, centre, radius);
+  if (!roots) return T(-1);
+  return own ? roots->far : (roots->near > 0 ? roots->near : roots->far);
+}
+
 template <class T>
 struct Hit {
   T t = std::numeric_limits<T>::infinity();
@@ -58,17 +71,30 @@ class Tracer {
     return trace(s_.eye, dir / len);
   }
 
+  // The nearest hit with 0 < t <= t_max; of equal t, the lowest object index (spheres
+  // before planes). The hierarchy, when there is one, gives exactly the loop's answer.
   Hit<T> closest(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max) const {
     Hit<T> best;
-    const int ns = static_cast<int>(s_.spheres.size());
-    for (int i = 0; i < ns; ++i) {
-      const PreparedSphere<T>& sp = s_.spheres[i];
-      if (i == from.object && !from.inside) continue;
-      auto roots = sphere_roots(o, d, sp.centre, sp.radius);
-      if (!roots) continue;
-      T t = i == from.object ? roots->far : (roots->near > 0 ? roots->near : roots->far);
-      if (t > 0 && t <= t_max && t < best.t) best = {t, i};
+    BvhRay ray;
+    if (!s_.bvh.empty() && ray.init(o, d, s_.bvh.scale)) {
+      const BvhSphere<T>* spheres = s_.bvh_spheres.data();
+      bvh_closest(s_.bvh, ray, float_limit_up(t_max), [&](std::int32_t first, std::int32_t count) {
+        for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp) {
+          const T t = sphere_t(o, d, sp->centre, sp->radius, sp->index, from);
+          if (t > 0 && t <= t_max && (t < best.t || (t == best.t && sp->index < best.object)))
+            best = {t, sp->index};
+        }
+        return float_limit_up(best.t < t_max ? best.t : t_max);
+      });
+    } else {
+      const int ns = static_cast<int>(s_.spheres.size());
+      for (int i = 0; i < ns; ++i) {
+        const PreparedSphere<T>& sp = s_.spheres[i];
+        const T t = sphere_t(o, d, sp.centre, sp.radius, i, from);
+        if (t > 0 && t <= t_max && t < best.t) best = {t, i};
+      }
     }
+    const int ns = static_cast<int>(s_.spheres.size());
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
       if (ns + j == from.object) continue;
       const PreparedPlane<T>& pl = s_.planes[j];
@@ -78,21 +104,43 @@ class Tracer {
     return best;
   }
 
-  bool occluded(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist) const {
+  // Whether anything lies at 0 < t < dist. Planes first: they are few and often block.
+  // `last_blocker` (optional) names a sphere to try first and learns the one that blocked:
+  // neighbouring shadow rays to one light are usually blocked by the same sphere. It can
+  // only make the answer come sooner, never change it.
+  bool occluded(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist,
+                int* last_blocker = nullptr) const {
     const int ns = static_cast<int>(s_.spheres.size());
-    for (int i = 0; i < ns; ++i) {
-      if (i == from.object && !from.inside) continue;
-      const PreparedSphere<T>& sp = s_.spheres[i];
-      auto roots = sphere_roots(o, d, sp.centre, sp.radius);
-      if (!roots) continue;
-      T t = i == from.object ? roots->far : (roots->near > 0 ? roots->near : roots->far);
-      if (t > 0 && t < dist) return true;
-    }
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
       if (ns + j == from.object) continue;
       const PreparedPlane<T>& pl = s_.planes[j];
       auto t = plane_distance(o, d, pl.normal, pl.point);
       if (t && *t > 0 && *t < dist) return true;
+    }
+    if (last_blocker && *last_blocker >= 0) {
+      const PreparedSphere<T>& sp = s_.spheres[*last_blocker];
+      const T t = sphere_t(o, d, sp.centre, sp.radius, *last_blocker, from);
+      if (t > 0 && t < dist) return true;
+    }
+    BvhRay ray;
+    if (!s_.bvh.empty() && ray.init(o, d, s_.bvh.scale)) {
+      const BvhSphere<T>* spheres = s_.bvh_spheres.data();
+      return bvh_any(
+          s_.bvh, ray, float_limit_up(dist), [&](std::int32_t first, std::int32_t count) {
+            for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp) {
+              const T t = sphere_t(o, d, sp->centre, sp->radius, sp->index, from);
+              if (t > 0 && t < dist) {
+                if (last_blocker) *last_blocker = sp->index;
+                return true;
+              }
+            }
+            return false;
+          });
+    }
+    for (int i = 0; i < ns; ++i) {
+      const PreparedSphere<T>& sp = s_.spheres[i];
+      const T t = sphere_t(o, d, sp.centre, sp.radius, i, from);
+      if (t > 0 && t < dist) return true;
     }
     return false;
   }
@@ -163,7 +211,10 @@ class Tracer {
   void add_direct_light(Vec3<T>& colour, const Vec3<T>& p, const Vec3<T>& n, const Vec3<T>& dir,
                         const PreparedMaterial<T>& m, Origin from) {
     const Vec3<T> v = -dir;
+    if (blockers_.size() != s_.lights.size()) blockers_.assign(s_.lights.size(), -1);
+    int* blocker = s_.bvh.empty() ? nullptr : blockers_.data();  // small scenes: just loop
     for (const PreparedLight<T>& light : s_.lights) {
+      int* last_blocker = blocker ? blocker++ : nullptr;
       Vec3<T> l = light.location - p;
       T r = glm::length(l);
       // A light exactly at the shaded point has no direction: it contributes nothing.
@@ -171,9 +222,13 @@ class Tracer {
       l /= r;
       T n_dot_l = glm::dot(n, l);
       if (!(n_dot_l > 0)) continue;
+      const Vec3<T> e = light.emissivity / r;
+      // A material lights cannot change gets exact zeros, unless E/r overflowed (then the
+      // NaN it makes must appear exactly as in the general path).
+      if (!m.lit && std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) continue;
       if (s_.features.shadows) {
         ++counts.shadow;
-        if (occluded(p, l, from, r)) continue;
+        if (occluded(p, l, from, r, last_blocker)) continue;
       }
       Vec3<T> term = m.diffuse * n_dot_l;
       if (s_.features.highlight && m.highlights) {
@@ -188,12 +243,13 @@ class Tracer {
         }
         term += m.specular * std::pow(base > 0 ? base : T(0), m.shininess);
       }
-      colour += (light.emissivity / r) * term;
+      colour += e * term;
     }
   }
 
   const PreparedScene<T>& s_;
   std::vector<Level> levels_;
+  std::vector<int> blockers_;  // per light: the sphere that blocked its last shadow ray
 };
 
 }  // namespace rayfarm

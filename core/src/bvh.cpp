@@ -1,0 +1,358 @@
+// Binned SAH construction (Wald, "On fast Construction of SAH-based Bounding Volume
+// Hierarchies", 2007) with 16 bins over the centroid bounds, all three axes binned in one
+// pass; the top levels are built on separate threads into their own arrays and spliced in
+// depth-first order, so the tree is the same for any thread count. The binary tree is then
+// collapsed to four children per node (each node adopts the grandchildren of its largest
+// inner children) and flattened.
+#include "bvh.h"
+
+#include <array>
+#include <thread>
+
+namespace rayfarm {
+namespace {
+
+constexpr int kBins = 16;                   // at most; small sets use one per primitive
+constexpr int kMedianDepth = 32;            // below this, median splits: depth <= 32 + log2(n) < 64
+constexpr std::size_t kParallelMin = 8192;  // smaller subtrees are not worth a thread
+constexpr double kMaxCoordinate = 1e18;     // beyond this the float nodes get coarse
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+using bvh_simd::F4;
+using bvh_simd::I4;
+using bvh_simd::vmax;
+using bvh_simd::vmin;
+
+// A box as two 4-wide vectors (x, y, z, and a lane nobody reads).
+struct Box3 {
+  F4 lo = bvh_simd::splat(kInf);
+  F4 hi = bvh_simd::splat(-kInf);
+
+  void grow(const Box3& b) {
+    lo = vmin(lo, b.lo);
+    hi = vmax(hi, b.hi);
+  }
+  void grow(F4 p) {
+    lo = vmin(lo, p);
+    hi = vmax(hi, p);
+  }
+  float area() const {
+    if (!(hi[0] >= lo[0])) return 0;
+    const F4 e = hi - lo;
+    return 2 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0]);
+  }
+};
+
+// A primitive during the build: its box rounded outward to float (fourth lanes zero, so no
+// arithmetic ever meets a stray denormal), and its index.
+struct Ref {
+  Box3 box;
+  std::int32_t index;
+  F4 centre2() const { return box.lo + box.hi; }  // twice the centre: no multiply needed
+};
+
+// The binary tree, children side by side: inner nodes point at the first of two.
+struct BuildNode {
+  Box3 box;
+  std::int32_t index;  // inner: first child; leaf: first primitive
+  std::int32_t count;  // 0 for an inner node
+};
+
+float round_down(double v) {
+  float f = static_cast<float>(v);
+  return static_cast<double>(f) > v ? std::nextafter(f, -kInf) : f;
+}
+
+float round_up(double v) {
+  float f = static_cast<float>(v);
+  return static_cast<double>(f) < v ? std::nextafter(f, kInf) : f;
+}
+
+// The bin of a (doubled) centre on each axis. NaN (0 * inf) lands in bin 0.
+I4 bins_of(F4 centre2, F4 lo, F4 scale, float last) {
+  const F4 f = vmin(vmax((centre2 - lo) * scale, bvh_simd::splat(0.0f)), bvh_simd::splat(last));
+  return __builtin_convertvector(f, I4);
+}
+
+class Builder {
+ public:
+  Builder(std::vector<Ref>& refs, int max_leaf)
+      : refs_(refs), scratch_(refs.size()), max_leaf_(max_leaf) {}
+
+  // Fills nodes[slot] with the subtree over refs[begin, end); its descendants are appended
+  // depth first (a child pair, then the first child's subtree, then the second's). Returns
+  // the subtree's depth.
+  int build(std::vector<BuildNode>& nodes, std::size_t slot, std::size_t begin, std::size_t end,
+            int depth, int threads) {
+    Box3 box, centres;
+    for (std::size_t i = begin; i < end; ++i) {
+      box.grow(refs_[i].box);
+      centres.grow(refs_[i].centre2());
+    }
+    nodes[slot].box = box;
+    const std::size_t mid = split(begin, end, box, centres, depth);
+    if (mid == begin) {
+      nodes[slot].index = static_cast<std::int32_t>(begin);
+      nodes[slot].count = static_cast<std::int32_t>(end - begin);
+      return 0;
+    }
+    const std::size_t first = nodes.size();
+    nodes[slot].index = static_cast<std::int32_t>(first);
+    nodes[slot].count = 0;
+    nodes.resize(first + 2);
+    if (threads > 1 && end - begin >= kParallelMin) {
+      std::vector<BuildNode> left(1), right(1);
+      const int left_threads = threads / 2;
+      int left_depth = 0;
+      std::thread worker([&] { left_depth = build(left, 0, begin, mid, depth + 1, left_threads); });
+      const int right_depth = build(right, 0, mid, end, depth + 1, threads - left_threads);
+      worker.join();
+      splice(nodes, first, left);
+      splice(nodes, first + 1, right);
+      return 1 + std::max(left_depth, right_depth);
+    }
+    const int left_depth = build(nodes, first, begin, mid, depth + 1, 1);
+    return 1 + std::max(left_depth, build(nodes, first + 1, mid, end, depth + 1, 1));
+  }
+
+ private:
+  // Puts a subtree built in its own array (root at 0) where the sequential build would have:
+  // its root in `slot`, the rest appended, with child indices moved along.
+  static void splice(std::vector<BuildNode>& nodes, std::size_t slot,
+                     const std::vector<BuildNode>& sub) {
+    const std::int32_t shift = static_cast<std::int32_t>(nodes.size()) - 1;
+    auto moved = [shift](BuildNode n) {
+      if (n.count == 0) n.index += shift;
+      return n;
+    };
+    nodes[slot] = moved(sub[0]);
+    for (std::size_t i = 1; i < sub.size(); ++i) nodes.push_back(moved(sub[i]));
+  }
+
+  // Partitions refs[begin, end) and returns where the second child starts; `begin` means
+  // "make a leaf".
+  std::size_t split(std::size_t begin, std::size_t end, const Box3& box, const Box3& centres,
+                    int depth) {
+    const std::size_t count = end - begin;
+    if (count <= 1) return begin;
+    const F4 extent = centres.hi - centres.lo;
+    int axis = 0;
+    if (extent[1] > extent[axis]) axis = 1;
+    if (extent[2] > extent[axis]) axis = 2;
+    if (!(extent[axis] > 0)) return begin;  // all centres coincide: nothing to separate
+    const bool small = count <= static_cast<std::size_t>(max_leaf_);
+    if (depth >= kMedianDepth) return small ? begin : median_split(begin, end, axis);
+
+    struct Bin {  // no initialisers: only the nb bins in use are cleared
+      Box3 box;
+      std::int32_t count;
+    };
+    const int nb = static_cast<int>(std::min<std::size_t>(kBins, count));
+    const float last = static_cast<float>(nb - 1);
+    std::array<std::array<Bin, kBins>, 3> bins;
+    for (auto& axis_bins : bins) std::fill_n(axis_bins.begin(), nb, Bin{Box3{}, 0});
+    F4 scale = bvh_simd::splat(0.0f);
+    for (int a = 0; a < 3; ++a)
+      scale[a] = extent[a] > 0 ? static_cast<float>(nb) / extent[a] : 0.0f;
+    for (std::size_t i = begin; i < end; ++i) {
+      const Ref& r = refs_[i];
+      const I4 b = bins_of(r.centre2(), centres.lo, scale, last);
+      for (int a = 0; a < 3; ++a) {
+        Bin& bin = bins[a][b[a]];
+        bin.box.grow(r.box);
+        ++bin.count;
+      }
+    }
+    // Price each of the nb - 1 planes per axis: sweep from the right, then the left.
+    float best_cost = kInf;
+    int best_axis = -1, best_bin = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (!(extent[a] > 0)) continue;
+      std::array<float, kBins> right_cost{};
+      Box3 acc;
+      std::int32_t n = 0;
+      for (int b = nb - 1; b > 0; --b) {
+        acc.grow(bins[a][b].box);
+        n += bins[a][b].count;
+        right_cost[b] = n ? acc.area() * static_cast<float>(n) : 0;
+      }
+      acc = Box3{};
+      n = 0;
+      for (int b = 0; b < nb - 1; ++b) {
+        acc.grow(bins[a][b].box);
+        n += bins[a][b].count;
+        if (n == 0 || static_cast<std::size_t>(n) == count) continue;
+        const float cost = acc.area() * static_cast<float>(n) + right_cost[b + 1];
+        if (cost < best_cost) {
+          best_cost = cost;
+          best_axis = a;
+          best_bin = b;
+        }
+      }
+    }
+    // Costs in units of one box test per node visit and one primitive test per primitive.
+    const float area = box.area();
+    if (small) {
+      const float split_cost = area > 0 ? 1 + best_cost / area : kInf;
+      if (!(static_cast<float>(count) > split_cost)) return begin;
+    }
+    if (best_axis < 0) return median_split(begin, end, axis);
+    // Branch-free partition through the scratch array (the left side keeps its order, the
+    // right side is reversed): the side is a coin toss the branch predictor cannot learn.
+    std::size_t left = begin, right = end;
+    for (std::size_t i = begin; i < end; ++i) {
+      const bool is_left =
+          bins_of(refs_[i].centre2(), centres.lo, scale, last)[best_axis] <= best_bin;
+      scratch_[is_left ? left : right - 1] = refs_[i];
+      left += is_left;
+      right -= !is_left;
+    }
+    std::copy(scratch_.begin() + begin, scratch_.begin() + end, refs_.begin() + begin);
+    const std::size_t mid = left;
+    if (mid == begin || mid == end) return median_split(begin, end, axis);
+    return mid;
+  }
+
+  // Halves the set by centre (ties by index): bounds the depth whatever the scene.
+  std::size_t median_split(std::size_t begin, std::size_t end, int axis) {
+    const std::size_t mid = begin + (end - begin) / 2;
+    std::nth_element(refs_.begin() + begin, refs_.begin() + mid, refs_.begin() + end,
+                     [axis](const Ref& a, const Ref& b) {
+                       const float ca = a.centre2()[axis], cb = b.centre2()[axis];
+                       return ca < cb || (ca == cb && a.index < b.index);
+                     });
+    return mid;
+  }
+
+  std::vector<Ref>& refs_;
+  std::vector<Ref> scratch_;  // threads use disjoint ranges of it, as of refs_
+  const int max_leaf_;
+};
+
+// Turns the binary tree into 4-wide nodes: a node's children are chosen by repeatedly
+// opening the inner child of largest area until there are four; its inner children are
+// stored side by side, then each is filled in turn, depth first.
+class Collapser {
+ public:
+  Collapser(const std::vector<BuildNode>& tree, Bvh& out) : tree_(tree), out_(out) {}
+
+  void run() {
+    if (tree_[0].count > 0) {  // a single leaf: a root with one slot
+      out_.nodes.emplace_back();
+      BvhNode& root = out_.nodes[0];
+      clear(root);
+      set_slot(root, 0, tree_[0]);
+    } else {
+      out_.nodes.emplace_back();
+      clear(out_.nodes[0]);
+      emit(0, 0);
+    }
+    out_.stats.nodes = static_cast<int>(out_.nodes.size());
+    if (out_.stats.leaves) out_.stats.mean_leaf /= out_.stats.leaves;
+  }
+
+ private:
+  static void clear(BvhNode& n) {
+    for (int i = 0; i < 4; ++i) {
+      for (int a = 0; a < 3; ++a) {
+        n.box[a][i] = kInf;
+        n.box[3 + a][i] = -kInf;
+      }
+      n.child[i] = 0;
+      n.count[i] = -1;
+    }
+  }
+
+  void set_slot(BvhNode& n, int i, const BuildNode& b) {
+    for (int a = 0; a < 3; ++a) {
+      n.box[a][i] = b.box.lo[a];
+      n.box[3 + a][i] = b.box.hi[a];
+    }
+    n.child[i] = b.index;
+    n.count[i] = b.count;
+    if (b.count > 0) {
+      ++out_.stats.leaves;
+      out_.stats.mean_leaf += b.count;  // a sum until run() ends
+    }
+  }
+
+  // Fills out_.nodes[self] (allocated, cleared) with the 4-wide node for inner binary node
+  // `b`, then its inner children.
+  void emit(std::int32_t b, std::int32_t self) {
+    std::int32_t kids[4] = {tree_[b].index, tree_[b].index + 1, -1, -1};
+    int k = 2;
+    while (k < 4) {
+      int open = -1;
+      float best = -1;
+      for (int i = 0; i < k; ++i) {
+        const BuildNode& c = tree_[kids[i]];
+        if (c.count == 0 && c.box.area() > best) {
+          best = c.box.area();
+          open = i;
+        }
+      }
+      if (open < 0) break;
+      const std::int32_t first = tree_[kids[open]].index;
+      kids[open] = first;
+      kids[k++] = first + 1;
+    }
+    // The inner children side by side: one visit's next nodes are close in memory.
+    std::int32_t slot[4];
+    for (int i = 0; i < k; ++i) {
+      slot[i] = -1;
+      if (tree_[kids[i]].count == 0) {
+        slot[i] = static_cast<std::int32_t>(out_.nodes.size());
+        out_.nodes.emplace_back();
+        clear(out_.nodes.back());
+      }
+    }
+    for (int i = 0; i < k; ++i) {
+      BuildNode c = tree_[kids[i]];
+      if (c.count == 0) c.index = slot[i];
+      set_slot(out_.nodes[self], i, c);
+    }
+    for (int i = 0; i < k; ++i)
+      if (slot[i] >= 0) emit(kids[i], slot[i]);
+  }
+
+  const std::vector<BuildNode>& tree_;
+  Bvh& out_;
+};
+
+}  // namespace
+
+Bvh build_bvh(std::span<const BvhBox> boxes, const BvhBuildOptions& options) {
+  Bvh bvh;
+  if (boxes.empty() ||
+      boxes.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 4))
+    return bvh;
+  double scale = 0;
+  std::vector<Ref> refs(boxes.size());
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const double lo = boxes[i].lo[a], hi = boxes[i].hi[a];
+      if (!(lo <= hi)) return bvh;  // NaN or inverted: not for us
+      scale = std::max({scale, std::abs(lo), std::abs(hi)});
+      refs[i].box.lo[a] = round_down(lo);
+      refs[i].box.hi[a] = round_up(hi);
+    }
+    refs[i].box.lo[3] = refs[i].box.hi[3] = 0;
+    refs[i].index = static_cast<std::int32_t>(i);
+  }
+  if (!(scale < kMaxCoordinate)) return bvh;
+  bvh.scale = scale;
+
+  std::vector<BuildNode> tree(1);
+  tree.reserve(2 * boxes.size());
+  const int depth = Builder(refs, std::max(1, options.max_leaf))
+                        .build(tree, 0, 0, refs.size(), 0, std::max(1, options.threads));
+
+  bvh.order.resize(refs.size());
+  for (std::size_t i = 0; i < refs.size(); ++i) bvh.order[i] = refs[i].index;
+  bvh.nodes.reserve(tree.size() / 2 + 1);
+  Collapser(tree, bvh).run();
+  bvh.stats.depth = depth;
+  return bvh;
+}
+
+}  // namespace rayfarm

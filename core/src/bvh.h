@@ -1,0 +1,270 @@
+// A bounding volume hierarchy over boxes (the scene's spheres): built as a binary tree by
+// binned SAH, then collapsed to four children per node and flattened into an array, so one
+// 4-wide float comparison tests all children of a node. Traversal visits leaves nearest
+// first (closest hit) or until one reports a hit (shadow rays); what a hit means is the
+// caller's business.
+//
+// The box test must never miss a primitive the caller's own test would hit, or the image
+// would change. Boxes are rounded outward to float and every slab is widened by a margin
+// that covers the rounding of both the slab test and the caller's intersection routine
+// (see BvhRay), so the hierarchy only ever skips what is truly out of reach.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <limits>
+#include <span>
+#include <vector>
+
+namespace rayfarm {
+
+struct BvhBox {
+  glm::dvec3 lo;
+  glm::dvec3 hi;
+};
+
+// Four children side by side, each box as lo x y z, hi x y z across the four lanes.
+// A slot is an inner node (count 0, child = node index), a leaf (count > 0, child = first
+// primitive in `order`) or empty (count -1, an inverted box no ray meets).
+struct alignas(64) BvhNode {
+  float box[6][4];
+  std::int32_t child[4];
+  std::int32_t count[4];
+};
+static_assert(sizeof(BvhNode) == 128);
+
+struct BvhStats {
+  int nodes = 0;
+  int leaves = 0;
+  int depth = 0;  // of the binary tree before collapsing
+  double mean_leaf = 0;
+};
+
+struct Bvh {
+  std::vector<BvhNode> nodes;       // nodes[0] is the root
+  std::vector<std::int32_t> order;  // primitive indices in leaf order
+  double scale = 0;                 // largest coordinate magnitude of any box
+  BvhStats stats;
+
+  bool empty() const { return nodes.empty(); }
+};
+
+struct BvhBuildOptions {
+  int threads = 1;   // the result does not depend on it
+  int max_leaf = 4;  // a larger set is always split when it can be
+};
+
+// Builds the hierarchy; empty when there are no boxes or their coordinates do not fit the
+// float nodes comfortably (the caller then keeps its plain loop).
+Bvh build_bvh(std::span<const BvhBox> boxes, const BvhBuildOptions& options = {});
+
+// The binary tree is at most this deep (the builder turns to median splits well before), so
+// the traversal stacks below cannot overflow: at most 3 entries are pushed per level.
+inline constexpr int kBvhMaxDepth = 64;
+
+namespace bvh_simd {
+using F4 = float __attribute__((vector_size(16)));
+using I4 = std::int32_t __attribute__((vector_size(16)));
+
+inline F4 load(const float* p) {
+  F4 v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+inline F4 splat(float x) { return F4{x, x, x, x}; }
+inline F4 vmin(F4 a, F4 b) { return a < b ? a : b; }
+inline F4 vmax(F4 a, F4 b) { return a > b ? a : b; }
+inline int bits(I4 m) {
+#if defined(__SSE__)
+  return __builtin_ia32_movmskps(reinterpret_cast<F4>(m));
+#else
+  return (m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8);
+#endif
+}
+}  // namespace bvh_simd
+
+// A ray set up for slab tests against the float nodes. Each slab is moved out by `margin`
+// (near planes towards the ray, far planes away), folded into two shifted origins.
+struct BvhRay {
+  bvh_simd::F4 near_origin[3];  // each value in all four lanes
+  bvh_simd::F4 far_origin[3];
+  bvh_simd::F4 inv_dir[3];
+  int near_row[3];  // row of box[] holding the near plane of each axis: a, or 3 + a
+  int far_row[3];
+
+  // Sets the ray up; false when the origin is too far out for float nodes (the caller then
+  // uses its loop). Not a constructor: an uninitialised BvhRay costs nothing.
+  template <class V>
+  bool init(const V& origin, const V& dir, double scene_scale) {
+    using bvh_simd::splat;
+    const double o[3] = {static_cast<double>(origin.x), static_cast<double>(origin.y),
+                         static_cast<double>(origin.z)};
+    const double extent = std::max({std::abs(o[0]), std::abs(o[1]), std::abs(o[2])}) + scene_scale;
+    if (!(extent < 1e18)) return false;
+    // A hit computed by the caller's sphere test (in float, at worst) lies within a few tens
+    // of float epsilons of (|origin| + scene scale) from the true surface, and the slab test
+    // adds a few more. The margin is 128 epsilons of that; tests/bvh_test.cpp finds grazing
+    // rays that need about one, and none that need more.
+    const double margin = extent * 0x1p-16;
+    const double d[3] = {static_cast<double>(dir.x), static_cast<double>(dir.y),
+                         static_cast<double>(dir.z)};
+    for (int a = 0; a < 3; ++a) {
+      // A zero (or tiny) component becomes tiny but finite, so no 0 * inf NaN can appear;
+      // slab distances then come out huge, as they are for a parallel ray.
+      float df = static_cast<float>(d[a]);
+      if (!(std::abs(df) >= 1e-30f)) df = std::copysign(1e-30f, static_cast<float>(d[a]));
+      const float inv = 1.0f / df;
+      const bool neg = inv < 0;
+      inv_dir[a] = splat(inv);
+      near_row[a] = neg ? 3 + a : a;
+      far_row[a] = neg ? a : 3 + a;
+      near_origin[a] = splat(static_cast<float>(neg ? o[a] - margin : o[a] + margin));
+      far_origin[a] = splat(static_cast<float>(neg ? o[a] + margin : o[a] - margin));
+    }
+    return true;
+  }
+
+  // Bit i set: the ray meets child i's widened box within [0, limit]; t_near its entries.
+  int hits(const BvhNode& n, float limit, bvh_simd::F4& t_near) const {
+    using namespace bvh_simd;
+    F4 tn = (load(n.box[near_row[0]]) - near_origin[0]) * inv_dir[0];
+    F4 tf = (load(n.box[far_row[0]]) - far_origin[0]) * inv_dir[0];
+    tn = vmax(tn, (load(n.box[near_row[1]]) - near_origin[1]) * inv_dir[1]);
+    tf = vmin(tf, (load(n.box[far_row[1]]) - far_origin[1]) * inv_dir[1]);
+    tn = vmax(tn, (load(n.box[near_row[2]]) - near_origin[2]) * inv_dir[2]);
+    tf = vmin(tf, (load(n.box[far_row[2]]) - far_origin[2]) * inv_dir[2]);
+    t_near = tn;
+    return bits((tn <= tf) & (tf >= splat(0.0f)) & (tn <= splat(limit)));
+  }
+};
+
+// A float limit no smaller than `t` (so rounding can never cut a hit off).
+template <class T>
+inline float float_limit_up(T t) {
+  constexpr T kMax = static_cast<T>(std::numeric_limits<float>::max());
+  if (t > kMax) return std::numeric_limits<float>::infinity();
+  float f = static_cast<float>(t);
+  if (static_cast<T>(f) < t) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  return f;
+}
+
+namespace bvh_detail {
+struct Entry {
+  std::int32_t child;
+  std::int32_t count;  // 0: an inner node
+  float t_near;
+};
+
+// Both cache lines of an inner node a traversal is about to visit.
+inline void prefetch(const BvhNode* nodes, std::int32_t child, std::int32_t count) {
+  if (count == 0) {
+    const char* p = reinterpret_cast<const char*>(nodes + child);
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + 64);
+  }
+}
+
+inline int pop_bit(int& mask) {
+  const int i = __builtin_ctz(static_cast<unsigned>(mask));
+  mask &= mask - 1;
+  return i;
+}
+}  // namespace bvh_detail
+
+// Visits leaves nearest first. `leaf(first, count)` tests order[first .. first + count) and
+// returns the new limit (a float no smaller than the closest hit's t so far). A node whose
+// entry lies beyond the limit is skipped; one entered exactly at the limit is not, so a
+// tie can still be resolved by the caller.
+template <class Leaf>
+void bvh_closest(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
+  using bvh_detail::Entry;
+  using bvh_detail::pop_bit;
+  Entry stack[3 * kBvhMaxDepth + 4];
+  int top = 0;
+  const BvhNode* nodes = bvh.nodes.data();
+  Entry cur{0, 0, 0};
+  for (;;) {
+    if (cur.count > 0) {
+      limit = leaf(cur.child, cur.count);
+    } else {
+      const BvhNode& n = nodes[cur.child];
+      bvh_simd::F4 t;
+      int mask = ray.hits(n, limit, t);
+      if (mask) {
+        // One child: go on. Two: the nearer now, the other later. More: sort them.
+        const int i = pop_bit(mask);
+        bvh_detail::prefetch(nodes, n.child[i], n.count[i]);
+        if (!mask) {
+          cur = {n.child[i], n.count[i], t[i]};
+          continue;
+        }
+        const int j = pop_bit(mask);
+        bvh_detail::prefetch(nodes, n.child[j], n.count[j]);
+        Entry a{n.child[i], n.count[i], t[i]}, b{n.child[j], n.count[j], t[j]};
+        if (b.t_near < a.t_near) std::swap(a, b);
+        if (!mask) {
+          stack[top++] = b;
+          cur = a;
+          continue;
+        }
+        Entry e[4] = {b, a};  // farthest first
+        int k = 2;
+        while (mask) {
+          const int c = pop_bit(mask);
+          bvh_detail::prefetch(nodes, n.child[c], n.count[c]);
+          Entry x{n.child[c], n.count[c], t[c]};
+          int m = k++;
+          for (; m > 0 && e[m - 1].t_near < x.t_near; --m) e[m] = e[m - 1];
+          e[m] = x;
+        }
+        for (int m = 0; m < k - 1; ++m) stack[top++] = e[m];
+        cur = e[k - 1];
+        continue;
+      }
+    }
+    for (;;) {
+      if (top == 0) return;
+      cur = stack[--top];
+      if (cur.t_near <= limit) break;
+    }
+  }
+}
+
+// Visits leaves until `leaf(first, count)` returns true (a hit); returns whether it did.
+template <class Leaf>
+bool bvh_any(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
+  using bvh_detail::pop_bit;
+  struct Slot {
+    std::int32_t child, count;
+  };
+  Slot stack[3 * kBvhMaxDepth + 4];
+  int top = 0;
+  const BvhNode* nodes = bvh.nodes.data();
+  Slot cur{0, 0};
+  for (;;) {
+    if (cur.count > 0) {
+      if (leaf(cur.child, cur.count)) return true;
+    } else {
+      const BvhNode& n = nodes[cur.child];
+      bvh_simd::F4 t;
+      int mask = ray.hits(n, limit, t);
+      if (mask) {
+        int i = pop_bit(mask);
+        while (mask) {
+          bvh_detail::prefetch(nodes, n.child[i], n.count[i]);
+          stack[top++] = {n.child[i], n.count[i]};
+          i = pop_bit(mask);
+        }
+        bvh_detail::prefetch(nodes, n.child[i], n.count[i]);
+        cur = {n.child[i], n.count[i]};
+        continue;
+      }
+    }
+    if (top == 0) return false;
+    cur = stack[--top];
+  }
+}
+
+}  // namespace rayfarm

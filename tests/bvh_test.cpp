@@ -1,0 +1,369 @@
+// The sphere hierarchy answers exactly as the plain loop does (object and t, to the bit), for
+// seeded random scenes and rays, the Origin rule, coincident and touching spheres, extreme
+// scales; and it is the same whatever the number of threads that built it.
+#include "bvh.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+
+#include "prepared_scene.h"
+#include "rayfarm/load.h"
+#include "rayfarm/render.h"
+#include "tracer.h"
+
+namespace rayfarm {
+namespace {
+
+struct Rng {
+  std::mt19937_64 engine;
+  explicit Rng(std::uint64_t seed) : engine(seed) {}
+  double in(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(engine); }
+  int below(int n) { return std::uniform_int_distribution<int>(0, n - 1)(engine); }
+  bool chance(double p) { return in(0, 1) < p; }
+  glm::dvec3 point(double extent) {
+    return {in(-extent, extent), in(-extent, extent), in(-extent, extent)};
+  }
+  glm::dvec3 direction() {
+    for (;;) {
+      glm::dvec3 v = point(1);
+      double l = glm::length(v);
+      if (l > 0.1 && l <= 1) return v / l;
+    }
+  }
+};
+
+Scene base_scene() {
+  Scene s;
+  Camera cam;
+  cam.name = "c";
+  cam.width = 8;
+  cam.height = 6;
+  cam.world_width = 8;
+  cam.world_height = 6;
+  cam.viewpoint = {4, 3, 5};
+  s.cameras.push_back(cam);
+  Material m;
+  m.name = "m";
+  m.diffuse = glm::dvec3(0.5);
+  s.materials.push_back(m);
+  s.lights.push_back({"l", {}, {0, 10, 0}, {1, 1, 1}});
+  return s;
+}
+
+void add_sphere(Scene& s, glm::dvec3 centre, double radius) {
+  Sphere sp;
+  sp.name = "s" + std::to_string(s.spheres.size());
+  sp.center = centre;
+  sp.radius = radius;
+  s.spheres.push_back(sp);
+}
+
+// `count` spheres in a cube of side 2 * extent, radii over three decades, with a share of
+// exact duplicates and of spheres touching an earlier one.
+Scene random_scene(Rng& rng, int count, double extent) {
+  Scene s = base_scene();
+  for (int i = 0; i < count; ++i) {
+    if (i > 0 && rng.chance(0.1)) {  // coincident with an earlier sphere
+      const Sphere& twin = s.spheres[rng.below(i)];
+      add_sphere(s, twin.center, twin.radius);
+    } else if (i > 0 && rng.chance(0.1)) {  // touching an earlier sphere from outside
+      const Sphere& other = s.spheres[rng.below(i)];
+      double r = extent * std::exp(rng.in(std::log(1e-3), std::log(0.1)));
+      add_sphere(s, other.center + (other.radius + r) * rng.direction(), r);
+    } else {
+      add_sphere(s, rng.point(extent), extent * std::exp(rng.in(std::log(1e-3), std::log(0.1))));
+    }
+  }
+  Plane floor;
+  floor.normal = {0, 1, 0};
+  floor.point = {0, -extent, 0};
+  s.planes.push_back(floor);
+  return s;
+}
+
+// The same prepared scene twice: once with a hierarchy, once without (the plain loop).
+template <class T>
+struct Pair {
+  PreparedScene<T> loop;
+  PreparedScene<T> bvh;
+};
+
+template <class T>
+Pair<T> prepare_both(const Scene& scene, int threads = 2) {
+  RenderOptions o;
+  o.specialize = false;  // never builds the hierarchy
+  Pair<T> p{prepare_scene<T>(scene, o, 0), prepare_scene<T>(scene, o, 0)};
+  build_sphere_bvh(p.bvh, threads);
+  return p;
+}
+
+template <class T>
+bool same(const Hit<T>& a, const Hit<T>& b) {
+  return a.object == b.object && std::memcmp(&a.t, &b.t, sizeof(T)) == 0;
+}
+
+// Rays of every kind the tracer makes: from outside the scene, from inside it, and
+// secondary rays leaving a hit point (from outside or inside of the object hit), with
+// finite and infinite limits; closest and occluded must agree.
+template <class T>
+void expect_same_answers(const Scene& scene, Rng& rng, double extent, int rays) {
+  const Pair<T> p = prepare_both<T>(scene);
+  ASSERT_FALSE(p.bvh.bvh.empty());
+  const Tracer<T> loop(p.loop), bvh(p.bvh);
+  const int objects = static_cast<int>(p.loop.spheres.size() + p.loop.planes.size());
+  int hits = 0, occluded = 0;
+  for (int i = 0; i < rays; ++i) {
+    Vec3<T> o(rng.point(rng.chance(0.3) ? 3 * extent : extent));
+    Vec3<T> d(rng.direction());
+    if (rng.chance(0.05)) d = Vec3<T>(0, 0, rng.chance(0.5) ? -1 : 1);  // axis-parallel
+    if (rng.chance(0.02)) d = Vec3<T>(-0.0, 1, 0);
+    const T inf = std::numeric_limits<T>::infinity();
+    const T t_max = rng.chance(0.5) ? inf : static_cast<T>(rng.in(0, 2 * extent));
+    Origin from;
+    if (rng.chance(0.3)) from = {rng.below(objects), rng.chance(0.5)};
+    Hit<T> a = loop.closest(o, d, from, t_max);
+    Hit<T> b = bvh.closest(o, d, from, t_max);
+    ASSERT_TRUE(same(a, b)) << "ray " << i << ": loop " << a.object << " t " << a.t << ", bvh "
+                            << b.object << " t " << b.t;
+    if (a.object < 0) continue;
+    ++hits;
+    // A secondary ray from the hit point, as the tracer would send it.
+    const Vec3<T> hit_point = o + a.t * d;
+    const Origin leaving{a.object, rng.chance(0.5)};
+    const Vec3<T> d2(rng.direction());
+    Hit<T> a2 = loop.closest(hit_point, d2, leaving, inf);
+    Hit<T> b2 = bvh.closest(hit_point, d2, leaving, inf);
+    ASSERT_TRUE(same(a2, b2)) << "secondary ray " << i << ": loop " << a2.object << " t " << a2.t
+                              << ", bvh " << b2.object << " t " << b2.t;
+    const T dist = static_cast<T>(rng.in(0, 2 * extent));
+    const bool blocked = loop.occluded(hit_point, d2, leaving, dist);
+    ASSERT_EQ(blocked, bvh.occluded(hit_point, d2, leaving, dist)) << "shadow ray " << i;
+    occluded += blocked;
+  }
+  // The rays must exercise both answers, or the comparison proves little.
+  EXPECT_GT(hits, rays / 20);
+  EXPECT_GT(occluded, 0);
+}
+
+TEST(Bvh, ClosestAndOccludedEqualTheLoopOnRandomScenes) {
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    Rng rng(seed);
+    const int count = std::vector<int>{20, 200, 3000}[seed % 3];
+    const Scene scene = random_scene(rng, count, 10);
+    expect_same_answers<double>(scene, rng, 10, 4000);
+    expect_same_answers<float>(scene, rng, 10, 4000);
+  }
+}
+
+TEST(Bvh, EqualsTheLoopAtExtremeScales) {
+  for (double scale : {1e-6, 1e6, 1e12}) {
+    SCOPED_TRACE("scale " + std::to_string(scale));
+    Rng rng(99);
+    const Scene scene = random_scene(rng, 500, scale);
+    expect_same_answers<double>(scene, rng, scale, 3000);
+    expect_same_answers<float>(scene, rng, scale, 3000);
+  }
+}
+
+// Rays grazing a sphere where it touches its own box (the point of largest x, y or z): the
+// computed hit may lie a rounding error outside the box, which the slab margin must cover.
+template <class T>
+void expect_same_grazing_answers(double extent) {
+  Rng rng(11);
+  Scene scene = base_scene();
+  for (int i = 0; i < 300; ++i) add_sphere(scene, rng.point(extent), extent * rng.in(0.001, 0.05));
+  const Pair<T> p = prepare_both<T>(scene);
+  const Tracer<T> loop(p.loop), bvh(p.bvh);
+  int hits = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Sphere& sp = scene.spheres[rng.below(300)];
+    const int axis = rng.below(3);
+    glm::dvec3 normal(0);
+    normal[axis] = rng.chance(0.5) ? 1 : -1;
+    const glm::dvec3 touch = sp.center + sp.radius * normal;
+    // A direction in the tangent plane, tilted by a hair towards or away from the sphere.
+    glm::dvec3 d = rng.direction();
+    d -= glm::dot(d, normal) * normal;
+    d = glm::normalize(glm::normalize(d) + rng.in(-1e-6, 1e-6) * normal);
+    const glm::dvec3 o = touch - rng.in(0.01, 3) * extent * d;
+    Hit<T> a = loop.closest(Vec3<T>(o), Vec3<T>(d), {}, std::numeric_limits<T>::infinity());
+    Hit<T> b = bvh.closest(Vec3<T>(o), Vec3<T>(d), {}, std::numeric_limits<T>::infinity());
+    ASSERT_TRUE(same(a, b)) << "ray " << i << ": loop " << a.object << ", bvh " << b.object;
+    ASSERT_EQ(loop.occluded(Vec3<T>(o), Vec3<T>(d), {}, T(4 * extent)),
+              bvh.occluded(Vec3<T>(o), Vec3<T>(d), {}, T(4 * extent)))
+        << "ray " << i;
+    hits += a.object >= 0;
+  }
+  EXPECT_GT(hits, 1000);
+}
+
+TEST(Bvh, GrazingRaysAtTheBoxFacesEqualTheLoop) {
+  for (double extent : {1.0, 1e-5, 1e5}) {
+    SCOPED_TRACE("extent " + std::to_string(extent));
+    expect_same_grazing_answers<double>(extent);
+    expect_same_grazing_answers<float>(extent);
+  }
+}
+
+TEST(Bvh, CoincidentSpheresResolveToTheLowestIndex) {
+  Scene s = base_scene();
+  // Sixteen identical spheres, then more spheres around them, then sixteen more copies.
+  for (int i = 0; i < 16; ++i) add_sphere(s, {0, 0, -5}, 1);
+  Rng rng(5);
+  for (int i = 0; i < 100; ++i)
+    add_sphere(s, glm::dvec3(3 + rng.in(0, 5), 0, 0) + rng.point(3), 0.3);
+  for (int i = 0; i < 16; ++i) add_sphere(s, {0, 0, -5}, 1);
+  const Pair<double> p = prepare_both<double>(s);
+  const Tracer<double> loop(p.loop), bvh(p.bvh);
+  const glm::dvec3 o(0, 0, 5);
+  Hit<double> a = loop.closest(o, {0, 0, -1}, {}, 1e300);
+  Hit<double> b = bvh.closest(o, {0, 0, -1}, {}, 1e300);
+  EXPECT_EQ(a.object, 0);
+  EXPECT_TRUE(same(a, b));
+  // Leaving twin 3 from outside: it is skipped, twin 0 (same t) is not.
+  const glm::dvec3 surface(0, 0, -4);
+  a = loop.closest(surface, {0, 0, 1}, {3, false}, 1e300);
+  b = bvh.closest(surface, {0, 0, 1}, {3, false}, 1e300);
+  EXPECT_TRUE(same(a, b));
+  for (int k = 0; k < 200; ++k) {
+    const glm::dvec3 d = rng.direction();
+    const Origin from{rng.below(32) < 16 ? rng.below(16) : 116 + rng.below(16), rng.chance(0.5)};
+    a = loop.closest(surface, d, from, 1e300);
+    b = bvh.closest(surface, d, from, 1e300);
+    ASSERT_TRUE(same(a, b)) << k;
+    ASSERT_EQ(loop.occluded(surface, d, from, 3.0), bvh.occluded(surface, d, from, 3.0)) << k;
+  }
+}
+
+TEST(Bvh, TouchingSpheresAgreeWithTheLoopAtTheContactPoint) {
+  Scene s = base_scene();
+  // A row of spheres, each touching the next, and a cluster around the contacts.
+  for (int i = 0; i < 40; ++i) add_sphere(s, {2.0 * i, 0, -5}, 1);
+  Rng rng(8);
+  for (int i = 0; i < 60; ++i) add_sphere(s, {rng.in(0, 80), rng.in(-3, 3), rng.in(-8, -2)}, 0.25);
+  const Pair<double> p = prepare_both<double>(s);
+  const Tracer<double> loop(p.loop), bvh(p.bvh);
+  for (int i = 0; i + 1 < 40; ++i) {
+    const glm::dvec3 contact(2.0 * i + 1, 0, -5);
+    for (int k = 0; k < 50; ++k) {
+      const glm::dvec3 d = rng.direction();
+      for (Origin from :
+           {Origin{i, false}, Origin{i, true}, Origin{i + 1, false}, Origin{i + 1, true}}) {
+        Hit<double> a = loop.closest(contact, d, from, 1e300);
+        Hit<double> b = bvh.closest(contact, d, from, 1e300);
+        ASSERT_TRUE(same(a, b)) << "contact " << i << " ray " << k;
+        ASSERT_EQ(loop.occluded(contact, d, from, 10.0), bvh.occluded(contact, d, from, 10.0));
+      }
+    }
+  }
+}
+
+TEST(Bvh, BuildIsTheSameForAnyThreadCount) {
+  Rng rng(3);
+  const Scene scene = random_scene(rng, 40000, 50);
+  std::vector<BvhBox> boxes;
+  for (const Sphere& sp : scene.spheres)
+    boxes.push_back({sp.center - sp.radius, sp.center + sp.radius});
+  const Bvh one = build_bvh(boxes, {1, 4});
+  ASSERT_FALSE(one.empty());
+  for (int threads : {2, 3, 8}) {
+    const Bvh many = build_bvh(boxes, {threads, 4});
+    ASSERT_EQ(one.order, many.order) << threads;
+    ASSERT_EQ(one.nodes.size(), many.nodes.size()) << threads;
+    EXPECT_EQ(std::memcmp(one.nodes.data(), many.nodes.data(), one.nodes.size() * sizeof(BvhNode)),
+              0)
+        << threads;
+  }
+}
+
+TEST(Bvh, EveryPrimitiveIsInExactlyOneLeafInsideItsNodeBox) {
+  Rng rng(4);
+  const Scene scene = random_scene(rng, 5000, 20);
+  std::vector<BvhBox> boxes;
+  for (const Sphere& sp : scene.spheres)
+    boxes.push_back({sp.center - sp.radius, sp.center + sp.radius});
+  const Bvh bvh = build_bvh(boxes, {2, 4});
+  std::vector<int> seen(boxes.size(), 0);
+  std::vector<std::int32_t> stack{0};
+  while (!stack.empty()) {
+    const BvhNode& n = bvh.nodes[stack.back()];
+    stack.pop_back();
+    for (int i = 0; i < 4; ++i) {
+      if (n.count[i] < 0) continue;
+      if (n.count[i] == 0) {
+        stack.push_back(n.child[i]);
+        continue;
+      }
+      for (int k = n.child[i]; k < n.child[i] + n.count[i]; ++k) {
+        const BvhBox& b = boxes[bvh.order[k]];
+        ++seen[bvh.order[k]];
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_LE(n.box[a][i], b.lo[a]);
+          EXPECT_GE(n.box[3 + a][i], b.hi[a]);
+        }
+      }
+    }
+  }
+  for (std::size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << i;
+}
+
+TEST(Bvh, DepthStaysBoundedOnDegenerateInput) {
+  // Spheres at exponentially growing distances: SAH alone would peel one off per level.
+  std::vector<BvhBox> boxes;
+  for (int i = 0; i < 3000; ++i) {
+    const double x = std::pow(1.01, i);
+    boxes.push_back({{x - 0.01, -0.01, -0.01}, {x + 0.01, 0.01, 0.01}});
+  }
+  const Bvh bvh = build_bvh(boxes, {1, 4});
+  ASSERT_FALSE(bvh.empty());
+  EXPECT_LT(bvh.stats.depth, kBvhMaxDepth);
+}
+
+TEST(Bvh, OutOfRangeCoordinatesKeepThePlainLoop) {
+  std::vector<BvhBox> boxes{{{0, 0, 0}, {1, 1, 1}}, {{1e30, 0, 0}, {1e30 + 1e15, 1, 1}}};
+  EXPECT_TRUE(build_bvh(boxes).empty());
+}
+
+TEST(Bvh, IsUsedAndReportedOnlyAboveTheThresholdAndWhenSpecialized) {
+  Rng rng(6);
+  RenderOptions o;
+  const Scene few = random_scene(rng, static_cast<int>(kBvhMinSpheres) - 1, 5);
+  const Scene many = random_scene(rng, 500, 5);
+  auto parts = [](const PreparedScene<double>& p) { return p.features.parts(); };
+  auto has_bvh = [&](const PreparedScene<double>& p) {
+    auto v = parts(p);
+    return std::find(v.begin(), v.end(), "bvh") != v.end();
+  };
+  EXPECT_FALSE(has_bvh(prepare_scene<double>(few, o, 0)));
+  EXPECT_TRUE(prepare_scene<double>(few, o, 0).bvh.empty());
+  EXPECT_TRUE(has_bvh(prepare_scene<double>(many, o, 0)));
+  o.specialize = false;
+  EXPECT_FALSE(has_bvh(prepare_scene<double>(many, o, 0)));
+  EXPECT_TRUE(prepare_scene<double>(many, o, 0).bvh.empty());
+}
+
+TEST(Bvh, RenderIsByteIdenticalWithAndWithoutTheHierarchyForAnyThreadCount) {
+  Rng rng(7);
+  Scene scene = random_scene(rng, 2000, 4);
+  scene.materials[0].specular = glm::dvec3(0.5);  // reflections and highlights too
+  scene.cameras[0].viewpoint = {0, 0, 12};
+  scene.cameras[0].world_width = 8;
+  for (Precision precision : {Precision::f64, Precision::f32}) {
+    RenderOptions o;
+    o.width = 96;
+    o.height = 72;
+    o.precision = precision;
+    RenderStats stats;
+    const Image with = render_image(scene, o, 3, &stats);
+    ASSERT_NE(std::find(stats.parts.begin(), stats.parts.end(), "bvh"), stats.parts.end());
+    EXPECT_EQ(render_image(scene, o, 1), with);
+    o.specialize = false;
+    EXPECT_EQ(render_image(scene, o, 2), with);
+  }
+}
+
+}  // namespace
+}  // namespace rayfarm
