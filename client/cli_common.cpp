@@ -30,7 +30,20 @@ std::optional<std::string> read_input(const std::string& path) {
     std::cerr << "rayfarm: cannot open " << path << ": " << std::strerror(errno) << "\n";
     return std::nullopt;
   }
-  return std::string(std::istreambuf_iterator<char>(in), {});
+  // One read of the file's size, then whatever is left (a file that grew, or one whose size
+  // the system does not know, such as a pipe).
+  std::string text;
+  std::error_code size_ec;
+  auto size = std::filesystem::file_size(path, size_ec);
+  if (!size_ec && size > 0) {
+    text.resize(static_cast<size_t>(size));
+    in.read(text.data(), static_cast<std::streamsize>(text.size()));
+    text.resize(static_cast<size_t>(in.gcount()));
+    if (!in) return text;  // end of file before the size (it shrank)
+  }
+  char buf[65536];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) text.append(buf, static_cast<size_t>(in.gcount()));
+  return text;
 }
 
 bool write_output(const std::string& path, const void* data, size_t size) {

@@ -67,9 +67,9 @@ TEST(ScaledTwins, ImageIsUnchangedWhenTheSceneIsScaledByAMillionEitherWay) {
 
 TEST(Precision, FloatAgreesWithDoubleWithinALevelWhereTheStableFormAllowsIt) {
   // Not in this list: huge-close (float cannot place a surface 1e6 from the origin closer
-  // than 0.06), coincident-touching and light-on-surface (which of two equal surfaces or
-  // which side of a light exactly on a surface is decided by rounding).
+  // than 0.06).
   for (const char* name : {"tiny-far.txt", "eye-inside.txt", "facing-mirrors.txt",
+                           "coincident-touching.txt", "light-on-surface.txt",
                            "one-by-one.txt", "one-by-n.txt", "n-by-one.txt", "wide-window.txt",
                            "narrow-window.txt", "tangent-grazing.txt"}) {
     SCOPED_TRACE(name);
@@ -98,6 +98,42 @@ TEST(Precision, EveryExtremeSceneRendersInBothPrecisions) {
       EXPECT_GE(st.error_estimate, 0);
     }
   }
+}
+
+TEST(Surfaces, ACoincidentTwinNeitherShadowsNorSpecklesTheFirstSphere) {
+  const std::string base = R"(
+    camera c { pixeldim 120 90 worlddim 8 6 viewpoint 4 3 5 }
+    material red { ambient 5 1 1 diffuse 0.7 0.1 0.1 specular 0.3 }
+    material blue { ambient 1 1 5 diffuse 0.1 0.1 0.7 specular 0.3 }
+    material floor { ambient 2 diffuse 0.5 specular 0.2 }
+    light l { location 4 8 2 emissivity 6 }
+    sphere one { material red center 3 1 -5 radius 1 }
+    plane floor { material floor normal 0 1 0 point 0 0 0 }
+  )";
+  {
+    Scene alone = test::scene_from(base);
+    Scene twinned = test::scene_from(
+        base + "sphere two { material blue center 3 1 -5 radius 1 }\n"
+                       "plane floor2 { material red normal 0 1 0 point 0 0 0 }\n");
+    for (Precision p : {Precision::f64, Precision::f32}) {
+      RenderOptions o;
+      o.precision = p;
+      EXPECT_EQ(test::render(twinned, o, 2), test::render(alone, o, 2))
+          << "a coincident sphere and plane (later in the file) must change nothing";
+    }
+  }
+}
+
+TEST(Surfaces, ALightOnASurfaceLightsItsSurroundingsEvenly) {
+  Scene s = load(kExtreme + "light-on-surface.txt");
+  Image img = test::render(s, with(Precision::f64, 160, 120), 2);
+  // The floor's bottom rows are lit smoothly: neighbouring pixels differ by a few levels, not
+  // by the on/off speckle of a light whose side is decided by rounding.
+  int jumps = 0;
+  for (int r = 100; r < 120; ++r)
+    for (int x = 1; x < 160; ++x)
+      jumps += std::abs(test::pixel(img, x, r)[0] - test::pixel(img, x - 1, r)[0]) > 8;
+  EXPECT_EQ(jumps, 0);
 }
 
 TEST(RootForms, TextbookFormInFloatLosesTheFarSphereAndTheStableFormKeepsIt) {

@@ -4,9 +4,24 @@
 namespace rayfarm {
 namespace {
 
-bool is_space(char c) {
-  return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f';
-}
+// Character classes: white space, and the characters that end a word ('{', '}', '#', and
+// '/' when it starts "//").
+enum : unsigned char { kSpace = 1, kNewline = 2, kWordEnd = 4, kSlash = 8 };
+
+constexpr auto kClass = [] {
+  struct Table {
+    unsigned char c[256] = {};
+  } t;
+  for (char c : {' ', '\t', '\r', '\v', '\f'}) t.c[static_cast<unsigned char>(c)] = kSpace | kWordEnd;
+  t.c[static_cast<unsigned char>('\n')] = kSpace | kNewline | kWordEnd;
+  t.c[static_cast<unsigned char>('{')] = kWordEnd;
+  t.c[static_cast<unsigned char>('}')] = kWordEnd;
+  t.c[static_cast<unsigned char>('#')] = kWordEnd;
+  t.c[static_cast<unsigned char>('/')] = kSlash;
+  return t;
+}();
+
+unsigned char char_class(char c) { return kClass.c[static_cast<unsigned char>(c)]; }
 
 }  // namespace
 
@@ -15,56 +30,52 @@ ModelLexer::ModelLexer(std::string_view text) : text_(text) {
   if (text_.starts_with("\xEF\xBB\xBF")) pos_ = line_start_ = 3;
 }
 
-const Token& ModelLexer::peek(int ahead) {
-  while (buffered_ <= ahead) buffer_[buffered_++] = scan();
-  return buffer_[ahead];
-}
-
-Token ModelLexer::next() {
-  peek(0);
-  Token t = buffer_[0];
-  for (int i = 1; i < buffered_; ++i) buffer_[i - 1] = buffer_[i];
-  --buffered_;
-  return t;
-}
-
 Token ModelLexer::scan() {
+  const char* p = text_.data();
+  const size_t n = text_.size();
+  size_t pos = pos_;
   for (;;) {
-    while (pos_ < text_.size() && is_space(text_[pos_])) {
-      if (text_[pos_] == '\n') {
+    while (pos < n) {
+      unsigned char k = char_class(p[pos]);
+      if (!(k & kSpace)) break;
+      if (k & kNewline) {
         ++line_;
-        line_start_ = pos_ + 1;
+        line_start_ = pos + 1;
       }
-      ++pos_;
+      ++pos;
     }
-    if (pos_ >= text_.size()) break;
-    bool comment = text_[pos_] == '#' ||
-                   (text_[pos_] == '/' && pos_ + 1 < text_.size() && text_[pos_ + 1] == '/');
+    if (pos >= n) break;
+    bool comment = p[pos] == '#' || (p[pos] == '/' && pos + 1 < n && p[pos + 1] == '/');
     if (!comment) break;
-    while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+    while (pos < n && p[pos] != '\n') ++pos;
   }
   Token t;
   t.line = line_;
-  t.column = static_cast<int>(pos_ - line_start_) + 1;
-  if (pos_ >= text_.size()) {
+  t.column = static_cast<int>(pos - line_start_) + 1;
+  if (pos >= n) {
+    pos_ = pos;
     t.kind = Token::end;
     return t;
   }
-  char c = text_[pos_];
+  char c = p[pos];
   if (c == '{' || c == '}') {
     t.kind = c == '{' ? Token::open : Token::close;
-    t.text = text_.substr(pos_++, 1);
+    t.text = text_.substr(pos, 1);
+    pos_ = pos + 1;
     return t;
   }
-  size_t start = pos_;
-  while (pos_ < text_.size()) {
-    char d = text_[pos_];
-    if (is_space(d) || d == '{' || d == '}' || d == '#') break;
-    if (d == '/' && pos_ + 1 < text_.size() && text_[pos_ + 1] == '/') break;
-    ++pos_;
+  size_t start = pos;
+  while (pos < n) {
+    unsigned char k = char_class(p[pos]);
+    if (k) {
+      if (k & kWordEnd) break;
+      if (pos + 1 < n && p[pos + 1] == '/') break;  // kSlash: "//" starts a comment
+    }
+    ++pos;
   }
+  pos_ = pos;
   t.kind = Token::word;
-  t.text = text_.substr(start, pos_ - start);
+  t.text = text_.substr(start, pos - start);
   return t;
 }
 

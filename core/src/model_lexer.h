@@ -18,8 +18,17 @@ class ModelLexer {
  public:
   explicit ModelLexer(std::string_view text);
 
-  const Token& peek(int ahead = 0);
-  Token next();
+  const Token& peek(int ahead = 0) {
+    while (buffered_ <= ahead) buffer_[buffered_++] = scan();
+    return buffer_[ahead];
+  }
+  Token next() {
+    peek(0);
+    Token t = buffer_[0];
+    for (int i = 1; i < buffered_; ++i) buffer_[i - 1] = buffer_[i];
+    --buffered_;
+    return t;
+  }
 
  private:
   Token scan();

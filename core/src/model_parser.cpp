@@ -2,6 +2,7 @@
 // error in a file is reported, not only the first.
 #include "rayfarm/model_parser.h"
 
+#include <algorithm>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,11 +27,22 @@ bool starts_like_number(std::string_view s) {
   return (c >= '0' && c <= '9') || c == '+' || c == '-' || c == '.';
 }
 
+char ascii_lower(char c) { return c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c; }
+
+// Whether s starts with `lower_prefix` (lower case), ignoring the case of s.
+bool starts_with_nocase(std::string_view s, std::string_view lower_prefix) {
+  if (s.size() < lower_prefix.size()) return false;
+  for (size_t i = 0; i < lower_prefix.size(); ++i)
+    if (ascii_lower(s[i]) != lower_prefix[i]) return false;
+  return true;
+}
+
 bool is_nan_or_inf_word(std::string_view s) {
   if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.remove_prefix(1);
-  std::string l(s.substr(0, 9));
-  for (char& c : l) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return l == "nan" || l == "inf" || l == "infinity" || l.starts_with("nan(");
+  // Only the first 9 characters count ("nan(" may be followed by anything).
+  std::string_view l = s.substr(0, 9);
+  return (l.size() == 3 && (starts_with_nocase(l, "nan") || starts_with_nocase(l, "inf"))) ||
+         (l.size() == 8 && starts_with_nocase(l, "infinity")) || starts_with_nocase(l, "nan(");
 }
 
 // A token written where a number belongs, even if it turns out not to be one.
@@ -62,10 +74,17 @@ void mark_all_invalid(EntityDesc& e) {
 
 class ModelParser {
  public:
-  ModelParser(std::string_view text, Diagnostics& diags) : lex_(text), diags_(diags) {}
+  ModelParser(std::string_view text, Diagnostics& diags)
+      : text_(text), lex_(text), diags_(diags) {}
 
   SceneDesc parse() {
     SceneDesc scene;
+    // Room for every entity up front: growing a vector of 100,000 entities copies them and
+    // touches twice the memory. An entity takes a '{' and at least ~16 bytes of text.
+    size_t braces = 0;
+    for (char c : text_)
+      braces += c == '{';
+    scene.entities.reserve(std::min(braces, text_.size() / 16 + 1));
     while (lex_.peek().kind != Token::end && !diags_.truncated()) {
       const Token& t = lex_.peek();
       if (t.kind == Token::close) {
@@ -175,7 +194,9 @@ class ModelParser {
       }
     }
 
-    std::vector<int> first_line(spec.attrs.size(), 0);
+    SmallVec<int, 8> first_line;
+    first_line.assign(spec.attrs.size(), 0);
+    e.attrs.reserve(spec.attrs.size());
     for (;;) {
       const Token& t = lex_.peek();
       if (t.kind == Token::end) {
@@ -287,10 +308,13 @@ class ModelParser {
     Where first_extra;
     for (;;) {
       const Token& v = lex_.peek();
-      if (v.kind != Token::word || find_attr(spec, v.text)) break;
+      if (v.kind != Token::word) break;
+      // The common case, a number: it is neither an attribute nor anything that ends values.
+      bool number_like = starts_like_number(v.text);
+      if (!number_like && find_attr(spec, v.text)) break;
       // A word where a number is still needed is a bad number ("radius abc"), unless it
       // is a typo of the next attribute or the next entity.
-      if (!looks_like_value(v.text) &&
+      if (!number_like && !looks_like_value(v.text) &&
           (valid_count(attr.kind, n) || n >= hi || ends_values(spec, v.text)))
         break;
       Token tok = lex_.next();
@@ -327,6 +351,7 @@ class ModelParser {
     return s;
   }
 
+  std::string_view text_;
   ModelLexer lex_;
   Diagnostics& diags_;
 };

@@ -2,7 +2,10 @@
 // material references and the camera rule (SPEC §1), reported for model and JSON alike.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
+#include <string_view>
+#include <vector>
 
 #include "rayfarm/scene.h"
 #include "rayfarm/schema.h"
@@ -21,31 +24,123 @@ std::string position_text(const Where& w) {
   return w.path;
 }
 
+// The attributes of one entity by their place in its spec; like EntityDesc::find, the first
+// one written wins. Looked up once per entity instead of once per use.
+class AttrTable {
+ public:
+  explicit AttrTable(const EntityDesc& e) : e_(e), spec_(entity_spec(e.kind)) {
+    if (spec_.attrs.size() > kSlots) return;  // never in the schema; fall back to find()
+    indexed_ = true;
+    for (const AttrDesc& a : e.attrs)
+      for (size_t k = 0; k < spec_.attrs.size(); ++k)
+        if (spec_.attrs[k].key == a.key) {
+          if (!slot_[k]) slot_[k] = &a;
+          break;
+        }
+  }
+
+  const AttrDesc* find(std::string_view key) const {
+    if (!indexed_) return e_.find(key);
+    for (size_t k = 0; k < spec_.attrs.size(); ++k)
+      if (spec_.attrs[k].key == key) return slot_[k];
+    return nullptr;
+  }
+  const AttrDesc* at(size_t k) const { return indexed_ ? slot_[k] : e_.find(spec_.attrs[k].key); }
+
+ private:
+  static constexpr size_t kSlots = 8;
+  const EntityDesc& e_;
+  const EntitySpec& spec_;
+  bool indexed_ = false;
+  const AttrDesc* slot_[kSlots] = {};
+};
+
+// Names of one entity kind seen so far, for duplicate checks: an open-addressing hash set of
+// the entities (the scene description outlives the builder). Slots keep the hash, so a probe
+// reads another entity's name only when the hashes match.
+class NameSet {
+ public:
+  void reserve(size_t n) {
+    size_t want = 16;
+    while (want < 2 * n) want *= 2;
+    if (want > slots_.size()) rehash(want);
+  }
+
+  // Adds e's name; returns the entity that first had it, or nullptr when it is new.
+  const EntityDesc* insert(const EntityDesc& e) {
+    if (2 * (count_ + 1) > slots_.size()) rehash(std::max<size_t>(16, 2 * slots_.size()));
+    size_t h = std::hash<std::string_view>{}(e.name);
+    size_t mask = slots_.size() - 1;
+    for (size_t i = h & mask;; i = (i + 1) & mask) {
+      Slot& s = slots_[i];
+      if (!s.entity) {
+        s = {h, &e};
+        ++count_;
+        return nullptr;
+      }
+      if (s.hash == h && s.entity->name == e.name) return s.entity;
+    }
+  }
+
+ private:
+  struct Slot {
+    size_t hash = 0;
+    const EntityDesc* entity = nullptr;
+  };
+
+  void rehash(size_t size) {
+    std::vector<Slot> old(size);
+    old.swap(slots_);
+    size_t mask = slots_.size() - 1;
+    for (const Slot& s : old) {
+      if (!s.entity) continue;
+      size_t i = s.hash & mask;
+      while (slots_[i].entity) i = (i + 1) & mask;
+      slots_[i] = s;
+    }
+  }
+
+  std::vector<Slot> slots_;
+  size_t count_ = 0;
+};
+
+// Checked values of one attribute (at most 3 numbers).
+using Values = SmallVec<double, 3>;
+
 class SceneBuilder {
  public:
   explicit SceneBuilder(Diagnostics& diags) : diags_(diags) {}
 
   std::optional<Scene> build(const SceneDesc& desc) {
     Scene scene;
+    size_t count[5] = {};
+    for (const EntityDesc& e : desc.entities) ++count[static_cast<int>(e.kind)];
+    scene.cameras.reserve(count[static_cast<int>(EntityKind::camera)]);
+    scene.materials.reserve(count[static_cast<int>(EntityKind::material)]);
+    scene.lights.reserve(count[static_cast<int>(EntityKind::light)]);
+    scene.spheres.reserve(count[static_cast<int>(EntityKind::sphere)]);
+    scene.planes.reserve(count[static_cast<int>(EntityKind::plane)]);
+    for (int k = 0; k < 5; ++k) name_sets_[k].reserve(count[k]);
     // Materials first: a sphere may use a material defined after it.
     for (const EntityDesc& e : desc.entities)
       if (e.kind == EntityKind::material) add_material(e, scene);
     for (const EntityDesc& e : desc.entities) {
-      check_required(e);
+      AttrTable attrs(e);
+      check_required(e, attrs);
       switch (e.kind) {
         case EntityKind::camera:
-          add_camera(e, scene);
+          add_camera(e, attrs, scene);
           break;
         case EntityKind::material:
           break;
         case EntityKind::light:
-          add_light(e, scene);
+          add_light(e, attrs, scene);
           break;
         case EntityKind::sphere:
-          add_sphere(e, scene);
+          add_sphere(e, attrs, scene);
           break;
         case EntityKind::plane:
-          add_plane(e, scene);
+          add_plane(e, attrs, scene);
           break;
       }
     }
@@ -81,9 +176,11 @@ class SceneBuilder {
     }
   }
 
-  void check_required(const EntityDesc& e) {
-    for (const AttrSpec& a : entity_spec(e.kind).attrs) {
-      if (!a.required || e.find(a.key)) continue;
+  void check_required(const EntityDesc& e, const AttrTable& attrs) {
+    const EntitySpec& spec = entity_spec(e.kind);
+    for (size_t k = 0; k < spec.attrs.size(); ++k) {
+      const AttrSpec& a = spec.attrs[k];
+      if (!a.required || attrs.at(k)) continue;
       if (std::find(e.invalid_keys.begin(), e.invalid_keys.end(), a.key) != e.invalid_keys.end())
         continue;
       diags_.error("missing-attribute",
@@ -93,31 +190,37 @@ class SceneBuilder {
     }
   }
 
-  // Registers a name; reports a duplicate of the same entity type.
+  // Registers a name; reports a duplicate of the same entity type. Camera and material
+  // names are also kept sorted, for the lists in messages about them.
   void check_name(const EntityDesc& e) {
     if (e.name.empty()) return;
-    auto& seen = names_[static_cast<int>(e.kind)];
-    auto [it, inserted] = seen.emplace(e.name, e.name_where);
-    if (!inserted)
-      diags_.error("duplicate-name",
-                   "duplicate " + std::string(entity_spec(e.kind).keyword) + " name '" + e.name +
-                       "' (first defined at " + position_text(it->second) + ")",
-                   e.name_where);
+    const EntityDesc* first = name_sets_[static_cast<int>(e.kind)].insert(e);
+    if (!first) {
+      if (e.kind == EntityKind::camera || e.kind == EntityKind::material)
+        names_[static_cast<int>(e.kind)].emplace(e.name, e.name_where);
+      return;
+    }
+    diags_.error("duplicate-name",
+                 "duplicate " + std::string(entity_spec(e.kind).keyword) + " name '" + e.name +
+                     "' (first defined at " + position_text(first->name_where) + ")",
+                 e.name_where);
   }
 
   // Values of an attribute after the range check for its kind; empty when absent or bad.
-  std::vector<double> values(const EntityDesc& e, std::string_view key) {
-    const AttrDesc* a = e.find(key);
+  Values values(const AttrTable& attrs, const EntityDesc& e, std::string_view key) {
+    const AttrDesc* a = attrs.find(key);
     const AttrSpec* spec = find_attr(entity_spec(e.kind), key);
     if (!a) {
       if (!spec || spec->required) return {};
       auto [lo, hi] = value_count(spec->kind);
       (void)lo;
-      return {spec->fallback.begin(), spec->fallback.begin() + hi};
+      Values out;
+      for (int i = 0; i < hi; ++i) out.push_back(spec->fallback[i]);
+      return out;
     }
     bool ok = true;
     auto fail = [&](size_t i, const std::string& what) {
-      const Where& w = i < a->value_where.size() ? a->value_where[i] : a->where;
+      Where w = i < a->value_where.size() ? a->value_where[i] : a->where;
       diags_.error("out-of-range",
                    "'" + a->key + "' " + what + ", got " + format_number(a->numbers[i]), w);
       ok = false;
@@ -152,19 +255,19 @@ class SceneBuilder {
       ok = false;
     }
     if (!ok) return {};
-    std::vector<double> out = a->numbers;
+    Values out = a->numbers;
     if (spec->kind == ValueKind::colour && out.size() == 1) out.assign(3, out[0]);
     return out;
   }
 
-  static glm::dvec3 vec3(const std::vector<double>& v) { return {v[0], v[1], v[2]}; }
+  static glm::dvec3 vec3(const Values& v) { return {v[0], v[1], v[2]}; }
 
-  void add_camera(const EntityDesc& e, Scene& scene) {
+  void add_camera(const EntityDesc& e, const AttrTable& attrs, Scene& scene) {
     had_camera_ = true;
     check_name(e);
-    auto pix = values(e, "pixeldim");
-    auto win = values(e, "worlddim");
-    auto eye = values(e, "viewpoint");
+    auto pix = values(attrs, e, "pixeldim");
+    auto win = values(attrs, e, "worlddim");
+    auto eye = values(attrs, e, "viewpoint");
     if (pix.size() != 2 || win.size() != 2 || eye.size() != 3) return;
     scene.cameras.push_back({e.name, e.where, static_cast<int>(pix[0]), static_cast<int>(pix[1]),
                              win[0], win[1], vec3(eye)});
@@ -172,23 +275,25 @@ class SceneBuilder {
 
   void add_material(const EntityDesc& e, Scene& scene) {
     check_name(e);
-    auto ka = values(e, "ambient"), kd = values(e, "diffuse"), ks = values(e, "specular");
-    auto n = values(e, "shininess");
+    AttrTable attrs(e);
+    auto ka = values(attrs, e, "ambient"), kd = values(attrs, e, "diffuse"),
+         ks = values(attrs, e, "specular");
+    auto n = values(attrs, e, "shininess");
     if (ka.size() != 3 || kd.size() != 3 || ks.size() != 3 || n.size() != 1) return;
     if (material_index_.count(e.name)) return;  // duplicate, reported
     material_index_[e.name] = static_cast<int>(scene.materials.size());
     scene.materials.push_back({e.name, e.where, vec3(ka), vec3(kd), vec3(ks), n[0]});
   }
 
-  void add_light(const EntityDesc& e, Scene& scene) {
+  void add_light(const EntityDesc& e, const AttrTable& attrs, Scene& scene) {
     check_name(e);
-    auto loc = values(e, "location"), em = values(e, "emissivity");
+    auto loc = values(attrs, e, "location"), em = values(attrs, e, "emissivity");
     if (loc.size() != 3 || em.size() != 3) return;
     scene.lights.push_back({e.name, e.where, vec3(loc), vec3(em)});
   }
 
-  std::optional<int> material_of(const EntityDesc& e) {
-    const AttrDesc* a = e.find("material");
+  std::optional<int> material_of(const EntityDesc& e, const AttrTable& attrs) {
+    const AttrDesc* a = attrs.find("material");
     if (!a) return std::nullopt;
     auto it = material_index_.find(a->word);
     if (it != material_index_.end()) return it->second;
@@ -212,24 +317,25 @@ class SceneBuilder {
     return names_[static_cast<int>(EntityKind::material)].count(name) > 0;
   }
 
-  void add_sphere(const EntityDesc& e, Scene& scene) {
+  void add_sphere(const EntityDesc& e, const AttrTable& attrs, Scene& scene) {
     check_name(e);
-    auto c = values(e, "center"), r = values(e, "radius");
-    auto m = material_of(e);
+    auto c = values(attrs, e, "center"), r = values(attrs, e, "radius");
+    auto m = material_of(e, attrs);
     if (c.size() != 3 || r.size() != 1 || !m) return;
     scene.spheres.push_back({e.name, e.where, vec3(c), r[0], *m});
   }
 
-  void add_plane(const EntityDesc& e, Scene& scene) {
+  void add_plane(const EntityDesc& e, const AttrTable& attrs, Scene& scene) {
     check_name(e);
-    auto n = values(e, "normal"), p = values(e, "point");
-    auto m = material_of(e);
+    auto n = values(attrs, e, "normal"), p = values(attrs, e, "point");
+    auto m = material_of(e, attrs);
     if (n.size() != 3 || p.size() != 3 || !m) return;
     scene.planes.push_back({e.name, e.where, vec3(n), vec3(p), *m});
   }
 
   Diagnostics& diags_;
-  std::map<std::string, Where> names_[5];
+  NameSet name_sets_[5];
+  std::map<std::string, Where> names_[5];  // cameras and materials only
   std::map<std::string, int> material_index_;
   bool had_camera_ = false;
 };

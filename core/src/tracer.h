@@ -3,6 +3,7 @@
 // reflection. Iterative, so deep recursion cannot overflow the stack.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -44,9 +45,41 @@ template <class T>
                                                        Origin from) {
   const bool own = index == from.object;
   if (own && !from.inside) return T(-1);
+  if (!own && from.object >= 0) {
+    // A secondary ray that starts on this sphere too (a coincident or touching sphere), to
+    // within the rounding of |f|^2 - r^2, at any scale: the rule of the ray's own object
+    // applies. Leaving it, no hit; entering it, only the far side. (Its near root is no
+    // guide: for grazing rays its rounding error is far larger than the scene's.)
+    const Vec3<T> f = o - centre;
+    const T ff = glm::dot(f, f), rr = radius * radius;
+    if (std::abs(ff - rr) <= 32 * std::numeric_limits<T>::epsilon() * (ff + rr)) {
+      if (glm::dot(f, d) >= 0) return T(-1);
+      auto roots = sphere_roots(o, d, centre, radius);
+      return roots ? roots->far : T(-1);
+    }
+  }
   auto roots = sphere_roots(o, d, centre, radius);
   if (!roots) return T(-1);
-  return own ? roots->far : (roots->near > 0 ? roots->near : roots->far);
+  if (own) return roots->far;
+  return roots->near > 0 ? roots->near : roots->far;
+}
+
+// Distance to a plane, or -1. A secondary ray that starts on the plane (within rounding)
+// cannot hit it: it is the ray's own surface or one coincident with it.
+template <class T>
+[[gnu::always_inline]] inline T plane_t(const Vec3<T>& o, const Vec3<T>& d,
+                                        const PreparedPlane<T>& plane, int index, Origin from) {
+  if (index == from.object) return T(-1);
+  auto t = plane_distance(o, d, plane.normal, plane.point);
+  if (!t) return T(-1);
+  if (from.object >= 0) {
+    const Vec3<T> a = glm::abs(o), b = glm::abs(plane.point);
+    const T scale = std::max({a.x, a.y, a.z, b.x, b.y, b.z});
+    if (std::abs(glm::dot(plane.normal, plane.point - o)) <=
+        32 * std::numeric_limits<T>::epsilon() * scale)
+      return T(-1);
+  }
+  return *t;
 }
 
 template <class T>
@@ -96,10 +129,8 @@ class Tracer {
     }
     const int ns = static_cast<int>(s_.spheres.size());
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
-      if (ns + j == from.object) continue;
-      const PreparedPlane<T>& pl = s_.planes[j];
-      auto t = plane_distance(o, d, pl.normal, pl.point);
-      if (t && *t > 0 && *t <= t_max && *t < best.t) best = {*t, ns + j};
+      const T t = plane_t(o, d, s_.planes[j], ns + j, from);
+      if (t > 0 && t <= t_max && t < best.t) best = {t, ns + j};
     }
     return best;
   }
@@ -112,10 +143,8 @@ class Tracer {
                 int* last_blocker = nullptr) const {
     const int ns = static_cast<int>(s_.spheres.size());
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
-      if (ns + j == from.object) continue;
-      const PreparedPlane<T>& pl = s_.planes[j];
-      auto t = plane_distance(o, d, pl.normal, pl.point);
-      if (t && *t > 0 && *t < dist) return true;
+      const T t = plane_t(o, d, s_.planes[j], ns + j, from);
+      if (t > 0 && t < dist) return true;
     }
     if (last_blocker && *last_blocker >= 0) {
       const PreparedSphere<T>& sp = s_.spheres[*last_blocker];
@@ -221,14 +250,21 @@ class Tracer {
       if (!(r > 0) || !std::isfinite(r)) continue;
       l /= r;
       T n_dot_l = glm::dot(n, l);
-      if (!(n_dot_l > 0)) continue;
+      // Near 0 the sign of N.L is the rounding noise of L = Lp - p (a light in the surface's
+      // own plane): it would switch the light and its highlight on and off pixel by pixel.
+      const Vec3<T> lp = glm::abs(light.location), ap = glm::abs(p);
+      const T noise = 8 * std::numeric_limits<T>::epsilon() *
+                      (std::max({lp.x, lp.y, lp.z}) + std::max({ap.x, ap.y, ap.z})) / r;
+      if (!(n_dot_l > noise)) continue;
       const Vec3<T> e = light.emissivity / r;
       // A material lights cannot change gets exact zeros, unless E/r overflowed (then the
       // NaN it makes must appear exactly as in the general path).
       if (!m.lit && std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) continue;
       if (s_.features.shadows) {
         ++counts.shadow;
-        if (occluded(p, l, from, r, last_blocker)) continue;
+        // A surface through the light itself (a light placed on an object) is not in the
+        // way: hits within the rounding noise of the light's position do not block.
+        if (occluded(p, l, from, r - 4 * noise * r, last_blocker)) continue;
       }
       Vec3<T> term = m.diffuse * n_dot_l;
       if (s_.features.highlight && m.highlights) {
