@@ -105,8 +105,8 @@ struct BvhRay {
     if (!(extent < 1e18)) return false;
     // A hit computed by the caller's sphere test (in float, at worst) lies within a few tens
     // of float epsilons of (|origin| + scene scale) from the true surface, and the slab test
-    // adds a few more. The margin is 128 epsilons of that; tests/bvh_test.cpp finds grazing
-    // rays that need about one, and none that need more.
+    // adds a few more. The margin is 128 epsilons of that; the grazing rays of
+    // tests/bvh_test.cpp need a fraction of one.
     const double margin = extent * 0x1p-16;
     const double d[3] = {static_cast<double>(dir.x), static_cast<double>(dir.y),
                          static_cast<double>(dir.z)};
