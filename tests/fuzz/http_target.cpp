@@ -6,6 +6,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -89,6 +90,13 @@ int http_request(const std::uint8_t* data, std::size_t size) {
   if (status == -1 || status == 500) {
     std::fprintf(stderr, "fuzz property violated: server answered %d\n", status);
     std::abort();
+  }
+  // Let any render the input started finish, so that no worker is mid-job when the fuzzer
+  // exits (its exit would pull globals from under a running render).
+  for (int i = 0; i < 500; ++i) {
+    auto health = f.service->health();
+    if (health["running"] == 0 && health["queue_depth"] == 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   // The server must still answer a plain request.
   if (round_trip(f.port, "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n") != 200) {
