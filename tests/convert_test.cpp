@@ -20,6 +20,8 @@
 namespace rayfarm {
 namespace {
 
+using test::expect_same_scene;
+
 // The lecture scene, as bundled in scenes/.
 const std::string kLecture = test::lecture_scene();
 
@@ -83,46 +85,6 @@ void expect_same_desc(const SceneDesc& a, const SceneDesc& b) {
       if (e.kind == kind) bs.push_back(&e);
     ASSERT_EQ(as.size(), bs.size()) << static_cast<int>(kind);
     for (size_t i = 0; i < as.size(); ++i) expect_same_entity(*as[i], *bs[i]);
-  }
-}
-
-void expect_same_scene(const Scene& a, const Scene& b) {
-  ASSERT_EQ(a.cameras.size(), b.cameras.size());
-  for (size_t i = 0; i < a.cameras.size(); ++i) {
-    EXPECT_EQ(a.cameras[i].name, b.cameras[i].name);
-    EXPECT_EQ(a.cameras[i].width, b.cameras[i].width);
-    EXPECT_EQ(a.cameras[i].height, b.cameras[i].height);
-    EXPECT_EQ(a.cameras[i].world_width, b.cameras[i].world_width);
-    EXPECT_EQ(a.cameras[i].world_height, b.cameras[i].world_height);
-    EXPECT_EQ(a.cameras[i].viewpoint, b.cameras[i].viewpoint);
-  }
-  ASSERT_EQ(a.materials.size(), b.materials.size());
-  for (size_t i = 0; i < a.materials.size(); ++i) {
-    EXPECT_EQ(a.materials[i].name, b.materials[i].name);
-    EXPECT_EQ(a.materials[i].ambient, b.materials[i].ambient);
-    EXPECT_EQ(a.materials[i].diffuse, b.materials[i].diffuse);
-    EXPECT_EQ(a.materials[i].specular, b.materials[i].specular);
-    EXPECT_EQ(a.materials[i].shininess, b.materials[i].shininess);
-  }
-  ASSERT_EQ(a.lights.size(), b.lights.size());
-  for (size_t i = 0; i < a.lights.size(); ++i) {
-    EXPECT_EQ(a.lights[i].name, b.lights[i].name);
-    EXPECT_EQ(a.lights[i].location, b.lights[i].location);
-    EXPECT_EQ(a.lights[i].emissivity, b.lights[i].emissivity);
-  }
-  ASSERT_EQ(a.spheres.size(), b.spheres.size());
-  for (size_t i = 0; i < a.spheres.size(); ++i) {
-    EXPECT_EQ(a.spheres[i].name, b.spheres[i].name);
-    EXPECT_EQ(a.spheres[i].center, b.spheres[i].center);
-    EXPECT_EQ(a.spheres[i].radius, b.spheres[i].radius);
-    EXPECT_EQ(a.spheres[i].material, b.spheres[i].material);
-  }
-  ASSERT_EQ(a.planes.size(), b.planes.size());
-  for (size_t i = 0; i < a.planes.size(); ++i) {
-    EXPECT_EQ(a.planes[i].name, b.planes[i].name);
-    EXPECT_EQ(a.planes[i].normal, b.planes[i].normal);
-    EXPECT_EQ(a.planes[i].point, b.planes[i].point);
-    EXPECT_EQ(a.planes[i].material, b.planes[i].material);
   }
 }
 
