@@ -90,7 +90,8 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   }
   bool any_light = false;
   for (const Light& l : scene.lights) {
-    p.lights.push_back({narrow<T>(l.location), narrow<T>(l.emissivity)});
+    const Vec3<T> location = narrow<T>(l.location), a = glm::abs(location);
+    p.lights.push_back({location, narrow<T>(l.emissivity), std::max({a.x, a.y, a.z})});
     any_light = any_light || nonzero(l.emissivity);
   }
 

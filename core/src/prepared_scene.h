@@ -60,6 +60,7 @@ template <class T>
 struct PreparedLight {
   Vec3<T> location;
   Vec3<T> emissivity;
+  T scale;  // largest |coordinate| of the location: sets the rounding noise of L = Lp - p
 };
 
 template <class T>

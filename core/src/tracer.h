@@ -240,6 +240,8 @@ class Tracer {
   void add_direct_light(Vec3<T>& colour, const Vec3<T>& p, const Vec3<T>& n, const Vec3<T>& dir,
                         const PreparedMaterial<T>& m, Origin from) {
     const Vec3<T> v = -dir;
+    const Vec3<T> ap = glm::abs(p);
+    const T point_scale = std::max({ap.x, ap.y, ap.z});
     if (blockers_.size() != s_.lights.size()) blockers_.assign(s_.lights.size(), -1);
     int* blocker = s_.bvh.empty() ? nullptr : blockers_.data();  // small scenes: just loop
     for (const PreparedLight<T>& light : s_.lights) {
@@ -252,9 +254,7 @@ class Tracer {
       T n_dot_l = glm::dot(n, l);
       // Near 0 the sign of N.L is the rounding noise of L = Lp - p (a light in the surface's
       // own plane): it would switch the light and its highlight on and off pixel by pixel.
-      const Vec3<T> lp = glm::abs(light.location), ap = glm::abs(p);
-      const T noise = 8 * std::numeric_limits<T>::epsilon() *
-                      (std::max({lp.x, lp.y, lp.z}) + std::max({ap.x, ap.y, ap.z})) / r;
+      const T noise = 8 * std::numeric_limits<T>::epsilon() * (light.scale + point_scale) / r;
       if (!(n_dot_l > noise)) continue;
       const Vec3<T> e = light.emissivity / r;
       // A material lights cannot change gets exact zeros, unless E/r overflowed (then the
