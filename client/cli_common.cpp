@@ -95,8 +95,8 @@ OptionSet OptionFlags::as_set() const {
 }
 
 std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
-                                        bool print_warnings) {
-  LoadedScene loaded = load_scene(text);
+                                        bool print_warnings, LoadDetail detail) {
+  LoadedScene loaded = load_scene(text, detail);
   Diagnostics shown;
   for (const Diagnostic& d : loaded.diags.items())
     if (d.severity == Severity::error || print_warnings)

@@ -30,7 +30,7 @@ struct OptionFlags {
 
 // Loads and checks a scene file, printing diagnostics. nullopt when it has errors.
 std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
-                                        bool print_warnings);
+                                        bool print_warnings, LoadDetail detail = LoadDetail::scene);
 
 // The scene's own options, then the command line's; errors printed. nullopt on error.
 std::optional<RenderOptions> resolve_options(const Scene& scene, const OptionFlags& flags);

@@ -65,7 +65,7 @@ void Service::restore() {
                      " times; it will not be retried";
         job->finished_ms = now_ms();
       } else {
-        LoadedScene loaded = load_scene(job->scene_text);
+        LoadedScene loaded = load_scene(job->scene_text, LoadDetail::scene);
         if (loaded.scene) {
           job->scene = std::make_shared<const Scene>(std::move(*loaded.scene));
           state = JobState::queued;

@@ -46,7 +46,7 @@ void Service::load_samples() {
       while (!description.empty() && description.front() == ' ') description.erase(0, 1);
       break;
     }
-    if (!load_scene(text).scene) continue;  // only scenes that render are offered
+    if (!load_scene(text, LoadDetail::scene).scene) continue;  // only scenes that render are offered
     samples_.push_back({name, description, e.path()});
   }
   std::sort(samples_.begin(), samples_.end(), [](auto& a, auto& b) { return a.name < b.name; });

@@ -1,6 +1,7 @@
 // Scene text to a checked scene.
 #include "rayfarm/load.h"
 
+#include "model_fast.h"
 #include "rayfarm/json_scene.h"
 #include "rayfarm/model_parser.h"
 
@@ -15,10 +16,15 @@ SceneFormat detect_format(std::string_view text) {
   return SceneFormat::model;
 }
 
-LoadedScene load_scene(std::string_view text) {
+LoadedScene load_scene(std::string_view text, LoadDetail detail) {
   LoadedScene out;
-  out.desc = detect_format(text) == SceneFormat::json ? parse_json_scene(text, out.diags)
-                                                      : parse_model(text, out.diags);
+  const SceneFormat format = detect_format(text);
+  if (detail == LoadDetail::scene && format == SceneFormat::model) {
+    out.scene = load_model_fast(text);
+    if (out.scene) return out;
+  }
+  out.desc = format == SceneFormat::json ? parse_json_scene(text, out.diags)
+                                         : parse_model(text, out.diags);
   // Build even after parse errors, so missing attributes and bad references are reported in
   // the same pass; only input that did not parse at all (JSON syntax) stops here.
   if (!out.diags.has_errors() || !out.desc.entities.empty())

@@ -23,6 +23,7 @@ constexpr auto kClass = [] {
 
 unsigned char char_class(char c) { return kClass.c[static_cast<unsigned char>(c)]; }
 
+
 }  // namespace
 
 // Windows editors start UTF-8 files with a byte-order mark; columns count from after it.
@@ -77,6 +78,14 @@ Token ModelLexer::scan() {
   t.kind = Token::word;
   t.text = text_.substr(start, pos - start);
   return t;
+}
+
+bool is_nan_or_inf_word(std::string_view s) {
+  if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.remove_prefix(1);
+  // Only the first 9 characters count ("nan(" may be followed by anything).
+  std::string_view l = s.substr(0, 9);
+  return (l.size() == 3 && (starts_with_nocase(l, "nan") || starts_with_nocase(l, "inf"))) ||
+         (l.size() == 8 && starts_with_nocase(l, "infinity")) || starts_with_nocase(l, "nan(");
 }
 
 }  // namespace rayfarm

@@ -5,6 +5,31 @@
 
 namespace rayfarm {
 
+// Whether s starts with `lower_prefix` (lower case), ignoring the case of s.
+inline bool starts_with_nocase(std::string_view s, std::string_view lower_prefix) {
+  if (s.size() < lower_prefix.size()) return false;
+  for (size_t i = 0; i < lower_prefix.size(); ++i) {
+    const char c = s[i] >= 'A' && s[i] <= 'Z' ? static_cast<char>(s[i] - 'A' + 'a') : s[i];
+    if (c != lower_prefix[i]) return false;
+  }
+  return true;
+}
+
+// A word that starts like a decimal number (it may still not be one).
+inline bool starts_like_number(std::string_view s) {
+  const char c = s.empty() ? 0 : s[0];
+  return (c >= '0' && c <= '9') || c == '+' || c == '-' || c == '.';
+}
+
+// NaN or infinity as strtod would read it (any case, any sign): not numbers in this format,
+// but clearly meant as values.
+bool is_nan_or_inf_word(std::string_view s);
+
+// A token written where a number belongs, even if it turns out not to be one.
+inline bool looks_like_value(std::string_view s) {
+  return starts_like_number(s) || is_nan_or_inf_word(s);
+}
+
 struct Token {
   enum Kind { word, open, close, end } kind = end;
   std::string_view text;

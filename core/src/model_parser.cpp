@@ -22,32 +22,6 @@ std::string quoted(std::string_view s) {
   return out + "'";
 }
 
-bool starts_like_number(std::string_view s) {
-  char c = s.empty() ? 0 : s[0];
-  return (c >= '0' && c <= '9') || c == '+' || c == '-' || c == '.';
-}
-
-char ascii_lower(char c) { return c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c; }
-
-// Whether s starts with `lower_prefix` (lower case), ignoring the case of s.
-bool starts_with_nocase(std::string_view s, std::string_view lower_prefix) {
-  if (s.size() < lower_prefix.size()) return false;
-  for (size_t i = 0; i < lower_prefix.size(); ++i)
-    if (ascii_lower(s[i]) != lower_prefix[i]) return false;
-  return true;
-}
-
-bool is_nan_or_inf_word(std::string_view s) {
-  if (!s.empty() && (s[0] == '+' || s[0] == '-')) s.remove_prefix(1);
-  // Only the first 9 characters count ("nan(" may be followed by anything).
-  std::string_view l = s.substr(0, 9);
-  return (l.size() == 3 && (starts_with_nocase(l, "nan") || starts_with_nocase(l, "inf"))) ||
-         (l.size() == 8 && starts_with_nocase(l, "infinity")) || starts_with_nocase(l, "nan(");
-}
-
-// A token written where a number belongs, even if it turns out not to be one.
-bool looks_like_value(std::string_view s) { return starts_like_number(s) || is_nan_or_inf_word(s); }
-
 std::vector<std::string_view> attr_names(const EntitySpec& spec) {
   std::vector<std::string_view> names;
   for (const AttrSpec& a : spec.attrs) names.push_back(a.key);
@@ -57,13 +31,6 @@ std::vector<std::string_view> attr_names(const EntitySpec& spec) {
 std::string with_hint(std::string message, const std::string& hint) {
   if (!hint.empty()) message += " (did you mean '" + hint + "'?)";
   return message;
-}
-
-// Whether `n` values are a complete value of this kind (a colour is 1 or 3 numbers, not 2).
-bool valid_count(ValueKind kind, int n) {
-  auto [lo, hi] = value_count(kind);
-  if (kind == ValueKind::colour && n == 2) return false;
-  return n >= lo && n <= hi;
 }
 
 // An entity whose body could not be read: every attribute counts as written-but-bad, so the
@@ -315,7 +282,7 @@ class ModelParser {
       // A word where a number is still needed is a bad number ("radius abc"), unless it
       // is a typo of the next attribute or the next entity.
       if (!number_like && !looks_like_value(v.text) &&
-          (valid_count(attr.kind, n) || n >= hi || ends_values(spec, v.text)))
+          (valid_value_count(attr.kind, n) || n >= hi || ends_values(spec, v.text)))
         break;
       Token tok = lex_.next();
       ++n;
@@ -331,7 +298,7 @@ class ModelParser {
         first_extra = at(tok);
       }
     }
-    if (!bad && !valid_count(attr.kind, n)) {
+    if (!bad && !valid_value_count(attr.kind, n)) {
       diags_.error("value-count",
                    "'" + a.key + "' takes " + std::string(describe(attr.kind)) + ", got " +
                        std::to_string(n) + (n == 1 ? " value" : " values"),

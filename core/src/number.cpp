@@ -7,22 +7,13 @@
 #include <string>
 #include <string_view>
 
+#include "model_lexer.h"
 #include "rayfarm/model_parser.h"
 
 namespace rayfarm {
 namespace {
 
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
-
-char ascii_lower(char c) { return c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c; }
-
-// Whether s starts with `lower_prefix` (lower case), ignoring the case of s.
-bool starts_with_nocase(std::string_view s, std::string_view lower_prefix) {
-  if (s.size() < lower_prefix.size()) return false;
-  for (size_t i = 0; i < lower_prefix.size(); ++i)
-    if (ascii_lower(s[i]) != lower_prefix[i]) return false;
-  return true;
-}
 
 bool equals_nocase(std::string_view s, std::string_view lower_word) {
   return s.size() == lower_word.size() && starts_with_nocase(s, lower_word);

@@ -7,6 +7,7 @@
 #include <string_view>
 #include <vector>
 
+#include "name_set.h"
 #include "rayfarm/scene.h"
 #include "rayfarm/schema.h"
 
@@ -53,55 +54,6 @@ class AttrTable {
   const EntitySpec& spec_;
   bool indexed_ = false;
   const AttrDesc* slot_[kSlots] = {};
-};
-
-// Names of one entity kind seen so far, for duplicate checks: an open-addressing hash set of
-// the entities (the scene description outlives the builder). Slots keep the hash, so a probe
-// reads another entity's name only when the hashes match.
-class NameSet {
- public:
-  void reserve(size_t n) {
-    size_t want = 16;
-    while (want < 2 * n) want *= 2;
-    if (want > slots_.size()) rehash(want);
-  }
-
-  // Adds e's name; returns the entity that first had it, or nullptr when it is new.
-  const EntityDesc* insert(const EntityDesc& e) {
-    if (2 * (count_ + 1) > slots_.size()) rehash(std::max<size_t>(16, 2 * slots_.size()));
-    size_t h = std::hash<std::string_view>{}(e.name);
-    size_t mask = slots_.size() - 1;
-    for (size_t i = h & mask;; i = (i + 1) & mask) {
-      Slot& s = slots_[i];
-      if (!s.entity) {
-        s = {h, &e};
-        ++count_;
-        return nullptr;
-      }
-      if (s.hash == h && s.entity->name == e.name) return s.entity;
-    }
-  }
-
- private:
-  struct Slot {
-    size_t hash = 0;
-    const EntityDesc* entity = nullptr;
-  };
-
-  void rehash(size_t size) {
-    std::vector<Slot> old(size);
-    old.swap(slots_);
-    size_t mask = slots_.size() - 1;
-    for (const Slot& s : old) {
-      if (!s.entity) continue;
-      size_t i = s.hash & mask;
-      while (slots_[i].entity) i = (i + 1) & mask;
-      slots_[i] = s;
-    }
-  }
-
-  std::vector<Slot> slots_;
-  size_t count_ = 0;
 };
 
 // Checked values of one attribute (at most 3 numbers).
@@ -194,15 +146,15 @@ class SceneBuilder {
   // names are also kept sorted, for the lists in messages about them.
   void check_name(const EntityDesc& e) {
     if (e.name.empty()) return;
-    const EntityDesc* first = name_sets_[static_cast<int>(e.kind)].insert(e);
-    if (!first) {
+    const EntityDesc* const* seen = name_sets_[static_cast<int>(e.kind)].insert(e.name, &e);
+    if (!seen) {
       if (e.kind == EntityKind::camera || e.kind == EntityKind::material)
         names_[static_cast<int>(e.kind)].emplace(e.name, e.name_where);
       return;
     }
     diags_.error("duplicate-name",
                  "duplicate " + std::string(entity_spec(e.kind).keyword) + " name '" + e.name +
-                     "' (first defined at " + position_text(first->name_where) + ")",
+                     "' (first defined at " + position_text((*seen)->name_where) + ")",
                  e.name_where);
   }
 
@@ -225,32 +177,11 @@ class SceneBuilder {
                    "'" + a->key + "' " + what + ", got " + format_number(a->numbers[i]), w);
       ok = false;
     };
-    for (size_t i = 0; i < a->numbers.size(); ++i) {
-      double v = a->numbers[i];
-      if (!std::isfinite(v)) {
-        fail(i, "must be a finite number");
-        continue;
-      }
-      switch (spec->kind) {
-        case ValueKind::pixel_dims:
-          if (v < 1 || v > 65535 || v != std::floor(v))
-            fail(i, "values must be integers from 1 to 65535");
-          break;
-        case ValueKind::window_dims:
-          if (!(v > 0)) fail(i, "values must be > 0");
-          break;
-        case ValueKind::colour:
-          if (v < 0) fail(i, "values must be >= 0");
-          break;
-        case ValueKind::positive:
-          if (!(v > 0)) fail(i, "must be > 0");
-          break;
-        default:
-          break;
-      }
-    }
-    if (ok && spec->kind == ValueKind::direction && a->numbers.size() == 3 && a->numbers[0] == 0 &&
-        a->numbers[1] == 0 && a->numbers[2] == 0) {
+    for (size_t i = 0; i < a->numbers.size(); ++i)
+      if (auto problem = value_problem(spec->kind, a->numbers[i]); !problem.empty())
+        fail(i, std::string(problem));
+    if (ok && spec->kind == ValueKind::direction && a->numbers.size() == 3 &&
+        is_zero_vector(a->numbers.data())) {
       diags_.error("out-of-range", "'" + a->key + "' must not be the zero vector", a->where);
       ok = false;
     }
@@ -334,7 +265,7 @@ class SceneBuilder {
   }
 
   Diagnostics& diags_;
-  NameSet name_sets_[5];
+  NameSet<const EntityDesc*> name_sets_[5];  // the scene description outlives the builder
   std::map<std::string, Where> names_[5];  // cameras and materials only
   std::map<std::string, int> material_index_;
   bool had_camera_ = false;

@@ -1,6 +1,8 @@
 // The entity/attribute table of the scene format (SPEC §1).
 #include "rayfarm/schema.h"
 
+#include <cmath>
+
 namespace rayfarm {
 namespace {
 
@@ -71,6 +73,33 @@ std::array<int, 2> value_count(ValueKind kind) {
     case V::material_ref: return {0, 0};
   }
   return {0, 0};
+}
+
+bool valid_value_count(ValueKind kind, int n) {
+  auto [lo, hi] = value_count(kind);
+  if (kind == V::colour && n == 2) return false;
+  return n >= lo && n <= hi;
+}
+
+std::string_view value_problem(ValueKind kind, double v) {
+  if (!std::isfinite(v)) return "must be a finite number";
+  switch (kind) {
+    case V::pixel_dims:
+      if (v < 1 || v > 65535 || v != std::floor(v)) return "values must be integers from 1 to 65535";
+      break;
+    case V::window_dims:
+      if (!(v > 0)) return "values must be > 0";
+      break;
+    case V::colour:
+      if (v < 0) return "values must be >= 0";
+      break;
+    case V::positive:
+      if (!(v > 0)) return "must be > 0";
+      break;
+    default:
+      break;
+  }
+  return {};
 }
 
 std::string_view describe(ValueKind kind) {

@@ -8,6 +8,7 @@
 #include "prepared_scene.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/load.h"
+#include "rayfarm/model_parser.h"
 #include "rayfarm/render.h"
 #include "tracer.h"
 
@@ -78,15 +79,17 @@ void BM_EncodePng(benchmark::State& state) {
 BENCHMARK(BM_EncodePng)->Unit(benchmark::kMillisecond);
 
 // Parsing and checking a 100,000-sphere model file (about 7 MB) from memory.
+// Arg 0: with the parsed description (what converters need); 1: the scene only (render).
 void BM_LoadScene100k(benchmark::State& state) {
   const std::string text = bench::random_spheres_text(100000);
+  const LoadDetail detail = state.range(0) ? LoadDetail::scene : LoadDetail::full;
   for (auto _ : state) {
-    LoadedScene loaded = load_scene(text);
+    LoadedScene loaded = load_scene(text, detail);
     benchmark::DoNotOptimize(loaded.scene->spheres.data());
   }
   state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(text.size()));
 }
-BENCHMARK(BM_LoadScene100k)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LoadScene100k)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_LoadGrid8000(benchmark::State& state) {
   std::ifstream in(RAYFARM_SOURCE_DIR "/scenes/grid-8000.txt", std::ios::binary);
@@ -103,3 +106,28 @@ BENCHMARK(BM_LoadGrid8000)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace rayfarm
+namespace rayfarm {
+namespace {
+void BM_ParseModel100k(benchmark::State& state) {
+  const std::string text = bench::random_spheres_text(100000);
+  for (auto _ : state) {
+    Diagnostics diags;
+    SceneDesc desc = parse_model(text, diags);
+    benchmark::DoNotOptimize(desc.entities.data());
+  }
+  state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(text.size()));
+}
+BENCHMARK(BM_ParseModel100k)->Unit(benchmark::kMillisecond);
+void BM_BuildScene100k(benchmark::State& state) {
+  const std::string text = bench::random_spheres_text(100000);
+  Diagnostics d0;
+  SceneDesc desc = parse_model(text, d0);
+  for (auto _ : state) {
+    Diagnostics diags;
+    auto scene = build_scene(desc, diags);
+    benchmark::DoNotOptimize(scene->spheres.data());
+  }
+}
+BENCHMARK(BM_BuildScene100k)->Unit(benchmark::kMillisecond);
+}
+}

@@ -63,6 +63,12 @@ int model_parser(const std::uint8_t* data, std::size_t size) {
   if (!diags.has_errors()) scene = build_scene(desc, diags);
   for (const Diagnostic& d : diags.items()) (void)format_diagnostic(d, "fuzz", text);
   check(diags.has_errors() || scene.has_value(), "no errors but no scene");
+  if (detect_format(text) == SceneFormat::model) {
+    // The loader's fast path decides as the full parser does, to the source positions.
+    const LoadedScene quick = load_scene(text, LoadDetail::scene);
+    check(quick.scene.has_value() == scene.has_value(), "fast path and full parser disagree");
+    check(!scene || *quick.scene == *scene, "fast path built another scene");
+  }
   if (!scene) return 0;
   Diagnostics lints;
   lint_scene(*scene, RenderOptions{}, lints);

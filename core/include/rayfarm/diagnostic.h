@@ -14,6 +14,8 @@ struct Where {
   int line = 0;
   int column = 0;
   std::string path;
+
+  bool operator==(const Where&) const = default;
 };
 
 enum class Severity { error, warning };

@@ -15,12 +15,16 @@ enum class SceneFormat { model, json };
 // JSON when the first non-blank character is '{', a model file otherwise.
 SceneFormat detect_format(std::string_view text);
 
+// What a caller needs back: `full` keeps the parsed description (for converters and content
+// keys); `scene` lets a plainly valid model file skip it, which loads it several times faster.
+enum class LoadDetail { full, scene };
+
 struct LoadedScene {
-  SceneDesc desc;
+  SceneDesc desc;  // empty when LoadDetail::scene took the fast path
   std::optional<Scene> scene;  // set when there were no errors
   Diagnostics diags;
 };
 
-LoadedScene load_scene(std::string_view text);
+LoadedScene load_scene(std::string_view text, LoadDetail detail = LoadDetail::full);
 
 }  // namespace rayfarm

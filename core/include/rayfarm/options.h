@@ -54,6 +54,8 @@ struct OptionValue {
   std::string name;
   std::string value;
   Where where;
+
+  bool operator==(const OptionValue&) const = default;
 };
 using OptionSet = std::vector<OptionValue>;
 

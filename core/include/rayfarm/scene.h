@@ -22,6 +22,8 @@ struct Camera {
   double world_width = 0;
   double world_height = 0;
   glm::dvec3 viewpoint{0};
+
+  bool operator==(const Camera&) const = default;
 };
 
 struct Material {
@@ -31,6 +33,8 @@ struct Material {
   glm::dvec3 diffuse{0};
   glm::dvec3 specular{0};
   double shininess = 32;
+
+  bool operator==(const Material&) const = default;
 };
 
 struct Light {
@@ -38,6 +42,8 @@ struct Light {
   Where where;  // the entity in the source
   glm::dvec3 location{0};
   glm::dvec3 emissivity{1};
+
+  bool operator==(const Light&) const = default;
 };
 
 struct Sphere {
@@ -46,6 +52,8 @@ struct Sphere {
   glm::dvec3 center{0};
   double radius = 1;
   int material = 0;
+
+  bool operator==(const Sphere&) const = default;
 };
 
 struct Plane {
@@ -54,6 +62,8 @@ struct Plane {
   glm::dvec3 normal{0, 1, 0};  // as written (not unit)
   glm::dvec3 point{0};
   int material = 0;
+
+  bool operator==(const Plane&) const = default;
 };
 
 struct Scene {
@@ -66,6 +76,9 @@ struct Scene {
 
   // Index of the camera named `name` (first when empty), or nullopt.
   std::optional<int> find_camera(std::string_view name) const;
+
+  // Exact equality, names and source positions included.
+  bool operator==(const Scene&) const = default;
 };
 
 // Checks all rules of the format (SPEC §1) and builds the scene. Every problem found is

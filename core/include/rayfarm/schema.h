@@ -43,6 +43,14 @@ std::span<const std::string_view> entity_keywords();
 std::array<int, 2> value_count(ValueKind kind);
 std::string_view describe(ValueKind kind);  // "2 integers >= 1", ... for messages
 
+// Whether n values make a complete value of this kind (a colour is 1 or 3 numbers, not 2).
+bool valid_value_count(ValueKind kind, int n);
+
+// What is wrong with one number of a value of this kind ("must be > 0", ...); empty when it
+// is in range. A direction's other rule (not all zero) is is_zero_vector.
+std::string_view value_problem(ValueKind kind, double v);
+inline bool is_zero_vector(const double* v) { return v[0] == 0 && v[1] == 0 && v[2] == 0; }
+
 // Names as the format allows them: [A-Za-z_][A-Za-z0-9_.-]*
 bool is_valid_name(std::string_view name);
 

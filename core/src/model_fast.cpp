@@ -1,0 +1,154 @@
+// Fast path of the model-file loader (see model_fast.h). It reads the same tokens as the
+// full parser (the same lexer) and applies the same schema table: value counts, ranges,
+// defaults, required attributes, names and material references. It gives up rather than
+// deciding anything the full parser would decide differently.
+#include "model_fast.h"
+
+#include <string>
+#include <vector>
+
+#include "model_lexer.h"
+#include "name_set.h"
+#include "rayfarm/model_parser.h"
+#include "rayfarm/schema.h"
+
+namespace rayfarm {
+namespace {
+
+constexpr size_t kMaxAttrs = 4;  // the most any entity has (a material)
+
+// One entity's attribute values, by their place in the entity's spec.
+struct Values {
+  double v[kMaxAttrs][3];
+  bool seen[kMaxAttrs] = {};
+  std::string_view material;  // a material_ref's name
+
+  glm::dvec3 vec3(size_t k) const { return {v[k][0], v[k][1], v[k][2]}; }
+};
+
+class FastLoader {
+ public:
+  explicit FastLoader(std::string_view text) : text_(text), lex_(text) {}
+
+  std::optional<Scene> run() {
+    // An entity takes at least one '{': enough room for all spheres without regrowth.
+    size_t braces = 0;
+    for (char c : text_) braces += c == '{';
+    scene_.spheres.reserve(braces);
+    for (;;) {
+      const Token t = lex_.next();
+      if (t.kind == Token::end) break;
+      if (t.kind != Token::word) return std::nullopt;
+      const EntitySpec* spec = find_entity(t.text);
+      if (!spec || !entity(*spec, t)) return std::nullopt;
+    }
+    if (scene_.cameras.empty()) return std::nullopt;
+    // Materials may be defined after the objects that use them: resolve at the end.
+    NameSet<int> materials;
+    materials.reserve(scene_.materials.size());
+    for (size_t i = 0; i < scene_.materials.size(); ++i)
+      materials.insert(scene_.materials[i].name, static_cast<int>(i));
+    auto resolve = [&](auto& objects, const std::vector<std::string_view>& names) {
+      for (size_t i = 0; i < objects.size(); ++i) {
+        const int* index = materials.insert(names[i], -1);
+        if (!index || *index < 0) return false;
+        objects[i].material = *index;
+      }
+      return true;
+    };
+    if (!resolve(scene_.spheres, sphere_materials_) || !resolve(scene_.planes, plane_materials_))
+      return std::nullopt;
+    return std::move(scene_);
+  }
+
+ private:
+  static Where at(const Token& t) { return {t.line, t.column, {}}; }
+
+  // KEYWORD [NAME] { ATTRIBUTE VALUES ... }, already past the keyword.
+  bool entity(const EntitySpec& spec, const Token& keyword) {
+    Token t = lex_.next();
+    std::string_view name;
+    if (t.kind == Token::word) {
+      if (!is_valid_name(t.text)) return false;
+      name = t.text;
+      t = lex_.next();
+    }
+    if (t.kind != Token::open || (name.empty() && spec.name_required)) return false;
+    if (!name.empty() && names_[static_cast<int>(spec.kind)].insert(name, 0)) return false;
+
+    Values values;
+    for (;;) {
+      const Token key = lex_.next();
+      if (key.kind == Token::close) break;
+      if (key.kind != Token::word) return false;
+      const AttrSpec* attr = find_attr(spec, key.text);
+      if (!attr) return false;
+      const size_t k = static_cast<size_t>(attr - spec.attrs.data());
+      if (values.seen[k]) return false;
+      values.seen[k] = true;
+      if (attr->kind == ValueKind::material_ref) {
+        const Token v = lex_.next();
+        if (v.kind != Token::word || looks_like_value(v.text) || find_attr(spec, v.text) ||
+            find_entity(v.text) || !is_valid_name(v.text))
+          return false;
+        values.material = v.text;
+        continue;
+      }
+      const int hi = value_count(attr->kind)[1];
+      int n = 0;
+      while (lex_.peek().kind == Token::word && starts_like_number(lex_.peek().text)) {
+        if (n == hi) return false;
+        const std::optional<double> x = parse_number(lex_.next().text);
+        if (!x || !value_problem(attr->kind, *x).empty()) return false;
+        values.v[k][n++] = *x;
+      }
+      if (!valid_value_count(attr->kind, n)) return false;
+      if (n == 1 && attr->kind == ValueKind::colour) values.v[k][1] = values.v[k][2] = values.v[k][0];
+      if (attr->kind == ValueKind::direction && is_zero_vector(values.v[k])) return false;
+    }
+    for (size_t k = 0; k < spec.attrs.size(); ++k) {
+      if (values.seen[k]) continue;
+      if (spec.attrs[k].required) return false;
+      for (int i = 0; i < 3; ++i) values.v[k][i] = spec.attrs[k].fallback[i];
+    }
+    add(spec.kind, std::string(name), at(keyword), values);
+    return true;
+  }
+
+  // Attribute places follow the schema table (core/src/schema.cpp).
+  void add(EntityKind kind, std::string name, Where where, const Values& v) {
+    switch (kind) {
+      case EntityKind::camera:
+        scene_.cameras.push_back({std::move(name), std::move(where), static_cast<int>(v.v[0][0]),
+                                  static_cast<int>(v.v[0][1]), v.v[1][0], v.v[1][1], v.vec3(2)});
+        break;
+      case EntityKind::material:
+        scene_.materials.push_back({std::move(name), std::move(where), v.vec3(0), v.vec3(1),
+                                    v.vec3(2), v.v[3][0]});
+        break;
+      case EntityKind::light:
+        scene_.lights.push_back({std::move(name), std::move(where), v.vec3(0), v.vec3(1)});
+        break;
+      case EntityKind::sphere:
+        scene_.spheres.push_back({std::move(name), std::move(where), v.vec3(1), v.v[2][0], -1});
+        sphere_materials_.push_back(v.material);
+        break;
+      case EntityKind::plane:
+        scene_.planes.push_back({std::move(name), std::move(where), v.vec3(1), v.vec3(2), -1});
+        plane_materials_.push_back(v.material);
+        break;
+    }
+  }
+
+  std::string_view text_;
+  ModelLexer lex_;
+  Scene scene_;
+  NameSet<char> names_[5];  // names per entity kind: a repeated one is an error
+  std::vector<std::string_view> sphere_materials_, plane_materials_;
+};
+
+}  // namespace
+
+std::optional<Scene> load_model_fast(std::string_view text) { return FastLoader(text).run(); }
+
+}  // namespace rayfarm
