@@ -146,7 +146,13 @@ inline float float_limit_up(T t) {
   constexpr T kMax = static_cast<T>(std::numeric_limits<float>::max());
   if (t > kMax) return std::numeric_limits<float>::infinity();
   float f = static_cast<float>(t);
-  if (static_cast<T>(f) < t) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+  if (static_cast<T>(f) < t) {
+    // The next float up, without a library call (this runs for every ray): f is finite here.
+    if (f == 0) return std::numeric_limits<float>::denorm_min();
+    std::uint32_t bits = __builtin_bit_cast(std::uint32_t, f);
+    bits += f > 0 ? 1 : -1;
+    f = __builtin_bit_cast(float, bits);
+  }
   return f;
 }
 
