@@ -4,6 +4,7 @@
 // deciding anything the full parser would decide differently.
 #include "model_fast.h"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,10 @@ class FastLoader {
     // An entity takes at least one '{': enough room for all spheres without regrowth.
     size_t braces = 0;
     for (char c : text_) braces += c == '{';
+    braces = std::min(braces, text_.size() / 16 + 1);  // at most one entity per 16 bytes
     scene_.spheres.reserve(braces);
+    sphere_materials_.reserve(braces);
+    names_[static_cast<int>(EntityKind::sphere)].reserve(braces);
     for (;;) {
       const Token t = lex_.next();
       if (t.kind == Token::end) break;
