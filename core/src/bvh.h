@@ -225,7 +225,12 @@ void bvh_closest(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
           for (; m > 0 && e[m - 1].t_near < x.t_near; --m) e[m] = e[m - 1];
           e[m] = x;
         }
-        for (int m = 0; m < k - 1; ++m) stack[top++] = e[m];
+        // All three copied whatever k is: a fixed copy, not a loop the compiler turns into
+        // a slow string move; the unused slot is overwritten by the next push.
+        stack[top] = e[0];
+        stack[top + 1] = e[1];
+        stack[top + 2] = e[2];
+        top += k - 1;
         cur = e[k - 1];
         continue;
       }
