@@ -30,7 +30,9 @@ bool constant_time_equal(const std::string& a, const std::string& b) {
 }  // namespace
 
 std::string route_label(const std::string& method, const std::string& path) {
-  static const std::regex job(R"(^/jobs/[^/]+(/image|/events)?$)");
+  // Never destroyed: a connection thread may still log a request while the process exits
+  // (a server embedded without a stop, as in the fuzz harness).
+  static const std::regex& job = *new std::regex(R"(^/jobs/[^/]+(/image|/events)?$)");
   std::smatch m;
   if (path.size() <= kMaxPathLength && std::regex_match(path, m, job))
     return method + " /jobs/:id" + m[1].str();
