@@ -155,6 +155,7 @@ void GuardedServer::close_after(httplib::Response& res) {
 }
 
 bool GuardedServer::process_and_close_socket(socket_t sock) {
+  open_.fetch_add(1);
   ConnectionState state;
   current = &state;
   auto ms = [](time_t sec, time_t usec) { return static_cast<int>(sec * 1000 + usec / 1000); };
@@ -187,6 +188,7 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
   if (state.close_after) lingering_close(sock);
   ::shutdown(sock, SHUT_RDWR);
   ::close(sock);
+  open_.fetch_sub(1);
   return ret;
 }
 

@@ -9,6 +9,7 @@
 
 #include <httplib.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstddef>
 
@@ -31,10 +32,14 @@ class GuardedServer : public httplib::Server {
   // This answer is sent without reading the request's body: the connection ends after it.
   static void close_after(httplib::Response& res);
 
+  // Connections a thread is serving, from taking them until they are closed.
+  int open_connections() const { return open_.load(); }
+
  private:
   bool process_and_close_socket(socket_t sock) override;
 
   ConnectionLimits limits_;
+  std::atomic<int> open_{0};
 };
 
 }  // namespace rayfarm::server

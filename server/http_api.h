@@ -24,6 +24,7 @@ class HttpApi {
   int bind(const std::string& host, int port);
   bool listen();  // blocks until stop()
   void stop();
+  int open_connections() const { return server_.open_connections(); }
 
   httplib::Server& http() { return server_; }
 
