@@ -26,12 +26,6 @@ for target in model_parser json_scene image_decode http_request; do
      2>&1 | grep -E "stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY|crash-|timeout-|Done|fuzz property" | head -20)
   if ls "$build"/crash-* "$build"/timeout-* "$build"/oom-* >/dev/null 2>&1; then
     echo "fuzzer $target found a failing input:"; ls "$build"/crash-* "$build"/timeout-* "$build"/oom-* 2>/dev/null
-    # NONFATAL_TARGETS: targets whose findings are reported but do not fail the run (an open
-    # finding under investigation; see the README).
-    if [[ " ${NONFATAL_TARGETS:-} " == *" $target "* ]]; then
-      mkdir -p "$build/findings-$target"; mv "$build"/crash-* "$build"/timeout-* "$build"/oom-* "$build/findings-$target"/ 2>/dev/null || true
-    else
-      exit 1
-    fi
+    exit 1
   fi
 done
