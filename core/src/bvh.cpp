@@ -36,6 +36,10 @@ struct Box3 {
     lo = vmin(lo, p);
     hi = vmax(hi, p);
   }
+  void grow(F4 p_lo, F4 p_hi) {
+    lo = vmin(lo, p_lo);
+    hi = vmax(hi, p_hi);
+  }
   float area() const {
     if (!(hi[0] >= lo[0])) return 0;
     const F4 e = hi - lo;
@@ -49,6 +53,12 @@ struct Ref {
   Box3 box;
   std::int32_t index;
   F4 centre2() const { return box.lo + box.hi; }  // twice the centre: no multiply needed
+};
+
+// A set's box and the box of its (doubled) centres.
+struct Bounds {
+  Box3 box;
+  Box3 centres;
 };
 
 // The binary tree, children side by side: inner nodes point at the first of two.
@@ -79,18 +89,14 @@ class Builder {
   Builder(std::vector<Ref>& refs, int max_leaf)
       : refs_(refs), scratch_(refs.size()), max_leaf_(max_leaf) {}
 
-  // Fills nodes[slot] with the subtree over refs[begin, end); its descendants are appended
-  // depth first (a child pair, then the first child's subtree, then the second's). Returns
-  // the subtree's depth.
+  // Fills nodes[slot] with the subtree over refs[begin, end), whose bounds are b; its
+  // descendants are appended depth first (a child pair, then the first child's subtree,
+  // then the second's). Returns the subtree's depth.
   int build(std::vector<BuildNode>& nodes, std::size_t slot, std::size_t begin, std::size_t end,
-            int depth, int threads) {
-    Box3 box, centres;
-    for (std::size_t i = begin; i < end; ++i) {
-      box.grow(refs_[i].box);
-      centres.grow(refs_[i].centre2());
-    }
-    nodes[slot].box = box;
-    const std::size_t mid = split(begin, end, box, centres, depth);
+            const Bounds& b, int depth, int threads) {
+    nodes[slot].box = b.box;
+    Bounds left, right;
+    const std::size_t mid = split(begin, end, b, depth, left, right);
     if (mid == begin) {
       nodes[slot].index = static_cast<std::int32_t>(begin);
       nodes[slot].count = static_cast<std::int32_t>(end - begin);
@@ -101,18 +107,20 @@ class Builder {
     nodes[slot].count = 0;
     nodes.resize(first + 2);
     if (threads > 1 && end - begin >= kParallelMin) {
-      std::vector<BuildNode> left(1), right(1);
+      std::vector<BuildNode> left_nodes(1), right_nodes(1);
       const int left_threads = threads / 2;
       int left_depth = 0;
-      std::thread worker([&] { left_depth = build(left, 0, begin, mid, depth + 1, left_threads); });
-      const int right_depth = build(right, 0, mid, end, depth + 1, threads - left_threads);
+      std::thread worker(
+          [&] { left_depth = build(left_nodes, 0, begin, mid, left, depth + 1, left_threads); });
+      const int right_depth =
+          build(right_nodes, 0, mid, end, right, depth + 1, threads - left_threads);
       worker.join();
-      splice(nodes, first, left);
-      splice(nodes, first + 1, right);
+      splice(nodes, first, left_nodes);
+      splice(nodes, first + 1, right_nodes);
       return 1 + std::max(left_depth, right_depth);
     }
-    const int left_depth = build(nodes, first, begin, mid, depth + 1, 1);
-    return 1 + std::max(left_depth, build(nodes, first + 1, mid, end, depth + 1, 1));
+    const int left_depth = build(nodes, first, begin, mid, left, depth + 1, 1);
+    return 1 + std::max(left_depth, build(nodes, first + 1, mid, end, right, depth + 1, 1));
   }
 
  private:
@@ -129,10 +137,12 @@ class Builder {
     for (std::size_t i = 1; i < sub.size(); ++i) nodes.push_back(moved(sub[i]));
   }
 
-  // Partitions refs[begin, end) and returns where the second child starts; `begin` means
-  // "make a leaf".
-  std::size_t split(std::size_t begin, std::size_t end, const Box3& box, const Box3& centres,
-                    int depth) {
+  // Partitions refs[begin, end) and returns where the second child starts, with the bounds
+  // of both sides; `begin` means "make a leaf".
+  std::size_t split(std::size_t begin, std::size_t end, const Bounds& set, int depth,
+                    Bounds& left, Bounds& right) {
+    const Box3& box = set.box;
+    const Box3& centres = set.centres;
     const std::size_t count = end - begin;
     if (count <= 1) return begin;
     const F4 extent = centres.hi - centres.lo;
@@ -141,7 +151,7 @@ class Builder {
     if (extent[2] > extent[axis]) axis = 2;
     if (!(extent[axis] > 0)) return begin;  // all centres coincide: nothing to separate
     const bool small = count <= static_cast<std::size_t>(max_leaf_);
-    if (depth >= kMedianDepth) return small ? begin : median_split(begin, end, axis);
+    if (depth >= kMedianDepth) return small ? begin : median_split(begin, end, axis, left, right);
 
     struct Bin {  // no initialisers: only the nb bins in use are cleared
       Box3 box;
@@ -196,31 +206,58 @@ class Builder {
       const float split_cost = area > 0 ? 1 + best_cost / area : kInf;
       if (!(static_cast<float>(count) > split_cost)) return begin;
     }
-    if (best_axis < 0) return median_split(begin, end, axis);
+    if (best_axis < 0) return median_split(begin, end, axis, left, right);
     // Branch-free partition through the scratch array (the left side keeps its order, the
     // right side is reversed): the side is a coin toss the branch predictor cannot learn.
-    std::size_t left = begin, right = end;
+    // The children's bounds are gathered on the way (each side grows by the reference or by
+    // an empty box), so no pass over the children is needed to find them.
+    std::size_t to_left = begin, to_right = end;
+    const Box3 none;
     for (std::size_t i = begin; i < end; ++i) {
-      const bool is_left =
-          bins_of(refs_[i].centre2(), centres.lo, scale, last)[best_axis] <= best_bin;
-      scratch_[is_left ? left : right - 1] = refs_[i];
-      left += is_left;
-      right -= !is_left;
+      const Ref& r = refs_[i];
+      const F4 c = r.centre2();
+      // Arithmetic rather than ?: so that the compiler cannot turn it back into a branch.
+      const std::size_t is_left = bins_of(c, centres.lo, scale, last)[best_axis] <= best_bin;
+      scratch_[to_right - 1 + is_left * (to_left - to_right + 1)] = r;
+      to_left += is_left;
+      to_right -= 1 - is_left;
+      const I4 m = -static_cast<std::int32_t>(is_left) + I4{0, 0, 0, 0};
+      left.box.grow(Box3{select(m, r.box.lo, none.lo), select(m, r.box.hi, none.hi)});
+      right.box.grow(Box3{select(~m, r.box.lo, none.lo), select(~m, r.box.hi, none.hi)});
+      left.centres.grow(select(m, c, none.lo), select(m, c, none.hi));
+      right.centres.grow(select(~m, c, none.lo), select(~m, c, none.hi));
     }
     std::copy(scratch_.begin() + begin, scratch_.begin() + end, refs_.begin() + begin);
-    const std::size_t mid = left;
-    if (mid == begin || mid == end) return median_split(begin, end, axis);
+    const std::size_t mid = to_left;
+    if (mid == begin || mid == end) return median_split(begin, end, axis, left, right);
     return mid;
   }
 
+  static F4 select(I4 mask, F4 yes, F4 no) {
+    return reinterpret_cast<F4>((reinterpret_cast<I4>(yes) & mask) |
+                                (reinterpret_cast<I4>(no) & ~mask));
+  }
+
+  Bounds bounds(std::size_t begin, std::size_t end) const {
+    Bounds b;
+    for (std::size_t i = begin; i < end; ++i) {
+      b.box.grow(refs_[i].box);
+      b.centres.grow(refs_[i].centre2());
+    }
+    return b;
+  }
+
   // Halves the set by centre (ties by index): bounds the depth whatever the scene.
-  std::size_t median_split(std::size_t begin, std::size_t end, int axis) {
+  std::size_t median_split(std::size_t begin, std::size_t end, int axis, Bounds& left,
+                           Bounds& right) {
     const std::size_t mid = begin + (end - begin) / 2;
     std::nth_element(refs_.begin() + begin, refs_.begin() + mid, refs_.begin() + end,
                      [axis](const Ref& a, const Ref& b) {
                        const float ca = a.centre2()[axis], cb = b.centre2()[axis];
                        return ca < cb || (ca == cb && a.index < b.index);
                      });
+    left = bounds(begin, mid);
+    right = bounds(mid, end);
     return mid;
   }
 
@@ -344,8 +381,13 @@ Bvh build_bvh(std::span<const BvhBox> boxes, const BvhBuildOptions& options) {
 
   std::vector<BuildNode> tree(1);
   tree.reserve(2 * boxes.size());
+  Bounds all;
+  for (const Ref& r : refs) {
+    all.box.grow(r.box);
+    all.centres.grow(r.centre2());
+  }
   const int depth = Builder(refs, std::max(1, options.max_leaf))
-                        .build(tree, 0, 0, refs.size(), 0, std::max(1, options.threads));
+                        .build(tree, 0, 0, refs.size(), all, 0, std::max(1, options.threads));
 
   bvh.order.resize(refs.size());
   for (std::size_t i = 0; i < refs.size(); ++i) bvh.order[i] = refs[i].index;
