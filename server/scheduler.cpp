@@ -80,6 +80,13 @@ size_t Scheduler::waiting() const {
   return n;
 }
 
+size_t Scheduler::jobs_of(const std::string& client) const {
+  std::lock_guard lock(mu_);
+  for (const Client& c : clients_)
+    if (c.name == client) return c.entries.size();
+  return 0;
+}
+
 size_t Scheduler::active() const {
   std::lock_guard lock(mu_);
   size_t n = 0;

@@ -35,6 +35,8 @@ class Scheduler {
   int queue_position(const Job& job) const;
   size_t waiting() const;
   size_t active() const;
+  // Jobs of this client queued or running (what the per-client limit counts).
+  size_t jobs_of(const std::string& client) const;
   int workers() const { return static_cast<int>(threads_.size()); }
 
   // Shutdown: no queued job starts any more; returns when running renders ended or the

@@ -87,12 +87,9 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     return {nullptr, e};
   }
   {
-    std::lock_guard lock(mu_);
-    int mine = 0;
-    for (auto& [id, j] : jobs_) {
-      std::lock_guard jl(j->mu);
-      mine += j->client == client && !is_final(j->state);
-    }
+    // The pool holds exactly the unfinished jobs: counting there costs the client's own
+    // jobs, not every job kept for reading back (thousands on a busy day).
+    const auto mine = static_cast<long long>(scheduler_->jobs_of(client));
     if (mine >= settings_.max_jobs_per_client) {
       metrics_.rejected("client_limit");
       ApiError e = api_error(
