@@ -32,6 +32,13 @@ class GuardedServer : public httplib::Server {
   // This answer is sent without reading the request's body: the connection ends after it.
   static void close_after(httplib::Response& res);
 
+  // After binding: the library listens with a backlog of 5, so a burst of new connections
+  // (a lab class submitting at once) meets dropped SYNs and 1 s retries. Listening again on
+  // the bound socket raises it (Linux takes a new backlog this way).
+  void widen_backlog() {
+    if (svr_sock_ != INVALID_SOCKET) ::listen(svr_sock_, SOMAXCONN);
+  }
+
   // Connections a thread is serving, from taking them until they are closed.
   int open_connections() const { return open_.load(); }
 

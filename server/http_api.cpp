@@ -195,8 +195,10 @@ void HttpApi::routes() {
 }
 
 int HttpApi::bind(const std::string& host, int port) {
-  if (port == 0) return server_.bind_to_any_port(host);
-  return server_.bind_to_port(host, port) ? port : -1;
+  const int bound = port == 0 ? server_.bind_to_any_port(host)
+                              : (server_.bind_to_port(host, port) ? port : -1);
+  if (bound > 0) server_.widen_backlog();
+  return bound;
 }
 
 bool HttpApi::listen() { return server_.listen_after_bind(); }

@@ -1225,6 +1225,38 @@ TEST(ServerAuth, ConfiguredTokensAreRequired) {
 
 // ---- cpp-httplib 0.11.4 weaknesses, over a raw socket ------------------------------------
 
+// A burst of connections (a class submitting at once) is queued by the kernel, not dropped:
+// the library's own backlog of 5 would leave the rest to SYN retries a second later. The
+// server is bound but accepts nothing here, so only the backlog can hold them.
+TEST(ServerHardening, BurstOfConnectionsIsQueuedWhileTheServerIsBusy) {
+  Service service(test_settings());
+  HttpApi api(service);
+  const int port = api.bind("127.0.0.1", 0);
+  ASSERT_GT(port, 0);
+  constexpr int kBurst = 32;
+  std::vector<int> fds;
+  for (int i = 0; i < kBurst; ++i) {
+    int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<uint16_t>(port));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+    fds.push_back(fd);
+  }
+  int established = 0;
+  for (int fd : fds) {
+    pollfd p{fd, POLLOUT, 0};
+    int err = 0;
+    socklen_t len = sizeof err;
+    if (::poll(&p, 1, 2000) == 1 && ::getsockopt(fd, SOL_SOCKET, SO_ERROR, &err, &len) == 0 &&
+        err == 0)
+      ++established;
+    ::close(fd);
+  }
+  EXPECT_EQ(established, kBurst);
+}
+
 TEST(ServerHardening, ChunkedBodyIsRefusedWithoutReadingIt) {
   Settings s = test_settings();
   s.max_body_bytes = 64 * 1024;
