@@ -21,11 +21,15 @@ for target in model_parser json_scene image_decode http_request; do
   esac
   cp tests/fuzz/regressions/$target/* "$corpus"/ 2>/dev/null || true
   echo "fuzzing $target for ${seconds}s"
+  # A finding makes the fuzzer exit non-zero: note it and name the input before failing.
+  status=0
   (cd "$build" && ASAN_OPTIONS=detect_leaks=0 ./tests/fuzz/fuzz_$target -max_total_time="$seconds" \
      -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 "corpus-$target" \
-     2>&1 | grep -E "stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY|crash-|timeout-|Done|fuzz property" | head -20)
-  if ls "$build"/crash-* "$build"/timeout-* "$build"/oom-* >/dev/null 2>&1; then
-    echo "fuzzer $target found a failing input:"; ls "$build"/crash-* "$build"/timeout-* "$build"/oom-* 2>/dev/null
+     2>&1 | grep -E "stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY|crash-|timeout-|Done|fuzz property" | head -20) \
+    || status=$?
+  if [ "$status" != 0 ] || ls "$build"/crash-* "$build"/timeout-* "$build"/oom-* >/dev/null 2>&1; then
+    echo "fuzzer $target failed (exit status $status); failing inputs:"
+    ls "$build"/crash-* "$build"/timeout-* "$build"/oom-* 2>/dev/null || true
     exit 1
   fi
 done
