@@ -82,6 +82,7 @@ void Service::restore() {
       std::lock_guard lock(mu_);
       job->sequence = ++sequence_;
       jobs_[job->id] = job;
+      ++image_refs_[job->image_name];
     }
     if (!rerun && state == JobState::failed) persist(*job);
     if (rerun) scheduler_->submit(job);

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <filesystem>
 #include <map>
+#include <unordered_map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -101,6 +102,9 @@ class Service {
 
   mutable std::mutex mu_;
   std::map<std::string, std::shared_ptr<Job>> jobs_;
+  // How many kept (or being submitted) jobs name each image: expiry deletes an image only when
+  // none does, without scanning the table under its lock.
+  std::unordered_map<std::string, int> image_refs_;
   std::uint64_t sequence_ = 0;
 
   std::vector<Sample> samples_;

@@ -137,8 +137,15 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   if (options.time_limit == 0) job->cache_key = content_key(loaded.desc, options);
   job->image_name = job->cache_key.empty() ? job->id : job->cache_key;
 
-  bool hit = !job->cache_key.empty() &&
-             (cache_.get(job->cache_key) || store_.has_image(job->cache_key));
+  bool hit;
+  {
+    // The image's reference is taken with the check, so expiry cannot delete an image this
+    // job is about to be answered from.
+    std::lock_guard lock(mu_);
+    hit = !job->cache_key.empty() &&
+          (cache_.get(job->cache_key) || store_.has_image(job->cache_key));
+    ++image_refs_[job->image_name];
+  }
   if (hit) {
     std::lock_guard jl(job->mu);
     job->state = JobState::done;
@@ -152,6 +159,10 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     if (!hit) store_.save_scene(job->id, scene_text);
     store_.save_record(*job);
   } catch (const std::exception& ex) {
+    {
+      std::lock_guard lock(mu_);
+      if (--image_refs_[job->image_name] == 0) image_refs_.erase(job->image_name);
+    }
     ApiError e = api_error(503, "storage_error", std::string("cannot store the job: ") + ex.what());
     e.retry_after = 10;
     return {nullptr, e};

@@ -978,6 +978,46 @@ TEST(ServerRestart, FinishedImagesAreServedAfterARestart) {
   EXPECT_EQ(again->get_header_value("X-Cache"), "hit");
 }
 
+// Expiry removes finished jobs past the TTL, and an image only when no kept job names it:
+// a newer cache hit on the same image keeps it readable.
+TEST(ServerRestart, ExpiryKeepsImagesThatKeptJobsStillName) {
+  TempDir dir;
+  Settings s = test_settings();
+  s.results_dir = dir.path.string();
+  s.result_ttl = 0.3;
+  TestServer server(s);
+  auto c = server.client();
+  auto first = c->Post("/render?wait=1&spp=2", kScene, "text/plain");
+  ASSERT_TRUE(first);
+  ASSERT_EQ(first->status, 200);
+  const std::string old_id = first->get_header_value("X-Job-Id");
+  std::this_thread::sleep_for(500ms);
+  auto second = c->Post("/render?wait=1&spp=2", kScene, "text/plain");
+  ASSERT_TRUE(second);
+  ASSERT_EQ(second->get_header_value("X-Cache"), "hit");
+  const std::string new_id = second->get_header_value("X-Job-Id");
+
+  server.service().expire();
+  auto gone = c->Get("/jobs/" + old_id);
+  ASSERT_TRUE(gone);
+  EXPECT_EQ(gone->status, 404);
+  auto kept = c->Get("/jobs/" + new_id + "/image");
+  ASSERT_TRUE(kept);
+  EXPECT_EQ(kept->status, 200);
+  EXPECT_EQ(kept->body, first->body);
+
+  // Once the last job naming it expires, the image goes too: the same request renders again.
+  std::this_thread::sleep_for(500ms);
+  server.service().expire();
+  auto expired = c->Get("/jobs/" + new_id + "/image");
+  ASSERT_TRUE(expired);
+  EXPECT_EQ(expired->status, 404);
+  auto third = c->Post("/render?wait=1&spp=2", kScene, "text/plain");
+  ASSERT_TRUE(third);
+  EXPECT_EQ(third->get_header_value("X-Cache"), "miss");
+  EXPECT_EQ(third->body, first->body);
+}
+
 TEST(ServerRestart, InterruptedJobRunsAgainAfterARestart) {
   TempDir dir;
   Settings s = test_settings();
