@@ -128,8 +128,6 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   }
 
   auto job = new_job(client);
-  job->scene_text = scene_text;
-  job->scene = scene;
   job->options = options;
   job->width = width;
   job->height = height;
@@ -146,6 +144,7 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
           (cache_.get(job->cache_key) || store_.has_image(job->cache_key));
     ++image_refs_[job->image_name];
   }
+  if (!hit) job->scene = scene;  // what the render reads; the text is on disk for re-runs
   if (hit) {
     std::lock_guard jl(job->mu);
     job->state = JobState::done;
