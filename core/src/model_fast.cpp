@@ -70,6 +70,7 @@ class FastLoader {
 
   // KEYWORD [NAME] { ATTRIBUTE VALUES ... }, already past the keyword.
   bool entity(const EntitySpec& spec, const Token& keyword) {
+    if (spec.attrs.size() > kMaxAttrs) return false;  // a schema grown past Values
     Token t = lex_.next();
     std::string_view name;
     if (t.kind == Token::word) {
