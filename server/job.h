@@ -29,7 +29,6 @@ struct Job {
   // Fixed at submission.
   std::string id;          // 128 random bits, hex
   std::string client;      // token digest or socket address
-  std::string scene_text;  // as submitted (persisted for re-runs)
   std::shared_ptr<const Scene> scene;
   RenderOptions options;
   std::string cache_key;   // content address of (scene, options); empty: not cacheable

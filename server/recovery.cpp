@@ -30,7 +30,6 @@ void Service::restore() {
     job->error_code = r.value("error_code", "");
     job->width = r.value("width", 0);
     job->height = r.value("height", 0);
-    job->scene_text = s.scene_text;
     if (r.contains("options") && r["options"].is_object())
       for (auto& [k, v] : r["options"].items())
         if (v.is_string() && !(k == "width" && v == "0") && !(k == "height" && v == "0") &&
@@ -65,7 +64,7 @@ void Service::restore() {
                      " times; it will not be retried";
         job->finished_ms = now_ms();
       } else {
-        LoadedScene loaded = load_scene(job->scene_text, LoadDetail::scene);
+        LoadedScene loaded = load_scene(s.scene_text, LoadDetail::scene);
         if (loaded.scene) {
           job->scene = std::make_shared<const Scene>(std::move(*loaded.scene));
           state = JobState::queued;

@@ -59,10 +59,9 @@ void Service::on_finished(Job& job, RenderJob* render) {
     job.finished_ms = now_ms();
     job.stats = render ? st : job.stats;
     job.render.reset();
-    // Only a re-run needs the scene, and a final job never runs again: a busy day keeps
+    // Only a render needs the scene, and a final job never runs again: a busy day keeps
     // thousands of finished jobs, so they keep only their record.
     job.scene.reset();
-    job.scene_text = std::string();
     ++job.version;
   }
   job.changed.notify_all();
