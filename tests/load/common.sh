@@ -22,3 +22,17 @@ stop_server() {
 trap stop_server EXIT
 
 rss_kb() { awk '/VmRSS/ {print $2}' "/proc/$1/status" 2>/dev/null || echo 0; }
+
+# Polls the jobs named after the first two arguments until their states read EXPECTED
+# ("done:8 ") or TIMEOUT seconds pass; leaves the last reading in $states.
+wait_for_states() {
+  local expected=$1 timeout=$2
+  shift 2
+  local deadline=$((SECONDS + timeout))
+  states=""
+  while [ $SECONDS -lt $deadline ]; do
+    states=$(for id in "$@"; do curl -s "http://127.0.0.1:$port/jobs/$id" | python3 -c 'import json,sys; print(json.load(sys.stdin).get("state","missing"))'; done | sort | uniq -c | awk '{printf "%s:%s ", $2, $1}')
+    [[ "$states" == "$expected" ]] && return 0
+    sleep 0.5
+  done
+}

@@ -13,13 +13,7 @@ sleep 0.5
 kill -9 "$pid"; wait "$pid" 2>/dev/null || true; pid=""
 echo "kill9: killed with ${#ids[@]} jobs accepted"
 start_server --results-dir "$dir" --workers 2
-deadline=$((SECONDS + 180))
-states=""
-while [ $SECONDS -lt $deadline ]; do
-  states=$(for id in "${ids[@]}"; do curl -s "http://127.0.0.1:$port/jobs/$id" | python3 -c 'import json,sys; print(json.load(sys.stdin).get("state","missing"))'; done | sort | uniq -c | awk '{printf "%s:%s ", $2, $1}')
-  [[ "$states" == "done:8 " ]] && break
-  sleep 0.5
-done
+wait_for_states "done:8 " 180 "${ids[@]}"
 echo "kill9: after restart: $states"
 curl -s -o /tmp/kill9.png "http://127.0.0.1:$port/jobs/${ids[0]}/image"
 "$build/client/rayfarm" render scenes/cho.txt --width 400 --height 300 --spp 32 --seed 1 -o /tmp/kill9-local.png -q

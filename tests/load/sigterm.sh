@@ -17,13 +17,7 @@ wait "$pid"; code=$?
 pid=""
 echo "sigterm: exit code $code; a submission during shutdown got ${during:-no answer}"
 start_server --results-dir "$dir" --workers 2
-deadline=$((SECONDS + 120))
-states=""
-while [ $SECONDS -lt $deadline ]; do
-  states=$(for id in "${ids[@]}"; do curl -s "http://127.0.0.1:$port/jobs/$id" | python3 -c 'import json,sys; print(json.load(sys.stdin).get("state","missing"))'; done | sort | uniq -c | awk '{printf "%s:%s ", $2, $1}')
-  [[ "$states" == "done:12 " ]] && break
-  sleep 0.5
-done
+wait_for_states "done:12 " 120 "${ids[@]}"
 echo "sigterm: after restart the 12 accepted jobs are: $states"
 rm -rf "$dir"
 [ "$code" = 0 ] && [[ "$during" == 503 || "$during" == 000 || -z "$during" ]] && [[ "$states" == "done:12 " ]] \
