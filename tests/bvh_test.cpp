@@ -261,12 +261,18 @@ TEST(Bvh, TouchingSpheresAgreeWithTheLoopAtTheContactPoint) {
   }
 }
 
-TEST(Bvh, BuildIsTheSameForAnyThreadCount) {
-  Rng rng(3);
-  const Scene scene = random_scene(rng, 40000, 50);
+// The spheres' bounding boxes, as scene preparation gives them to the builder.
+std::vector<BvhBox> boxes_of(const Scene& scene) {
   std::vector<BvhBox> boxes;
   for (const Sphere& sp : scene.spheres)
     boxes.push_back({sp.center - sp.radius, sp.center + sp.radius});
+  return boxes;
+}
+
+TEST(Bvh, BuildIsTheSameForAnyThreadCount) {
+  Rng rng(3);
+  const Scene scene = random_scene(rng, 40000, 50);
+  const std::vector<BvhBox> boxes = boxes_of(scene);
   const Bvh one = build_bvh(boxes, {1, 4});
   ASSERT_FALSE(one.empty());
   for (int threads : {2, 3, 8}) {
@@ -282,9 +288,7 @@ TEST(Bvh, BuildIsTheSameForAnyThreadCount) {
 TEST(Bvh, EveryPrimitiveIsInExactlyOneLeafInsideItsNodeBox) {
   Rng rng(4);
   const Scene scene = random_scene(rng, 5000, 20);
-  std::vector<BvhBox> boxes;
-  for (const Sphere& sp : scene.spheres)
-    boxes.push_back({sp.center - sp.radius, sp.center + sp.radius});
+  const std::vector<BvhBox> boxes = boxes_of(scene);
   const Bvh bvh = build_bvh(boxes, {2, 4});
   std::vector<int> seen(boxes.size(), 0);
   std::vector<std::int32_t> stack{0};
