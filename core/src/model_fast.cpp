@@ -54,8 +54,8 @@ class FastLoader {
       materials.insert(scene_.materials[i].name, static_cast<int>(i));
     auto resolve = [&](auto& objects, const std::vector<std::string_view>& names) {
       for (size_t i = 0; i < objects.size(); ++i) {
-        const int* index = materials.insert(names[i], -1);
-        if (!index || *index < 0) return false;
+        const int* index = materials.find(names[i]);
+        if (!index) return false;
         objects[i].material = *index;
       }
       return true;

@@ -19,6 +19,18 @@ class NameSet {
     if (want > slots_.size()) rehash(want);
   }
 
+  // The payload of the name, or nullptr when it is not in the set.
+  const Payload* find(std::string_view name) const {
+    if (slots_.empty()) return nullptr;
+    const size_t h = std::hash<std::string_view>{}(name);
+    const size_t mask = slots_.size() - 1;
+    for (size_t i = h & mask;; i = (i + 1) & mask) {
+      const Slot& s = slots_[i];
+      if (!s.used) return nullptr;
+      if (s.hash == h && s.name == name) return &s.payload;
+    }
+  }
+
   // Adds the name; returns the payload of the name's first insertion, or nullptr when the
   // name is new.
   const Payload* insert(std::string_view name, Payload payload) {
