@@ -3,6 +3,7 @@
 #include "prepared_scene.h"
 
 #include <algorithm>
+#include <exception>
 #include <limits>
 #include <thread>
 
@@ -33,6 +34,8 @@ std::vector<std::string> Features::parts() const {
   if (reflection) out.push_back("reflection");
   if (supersampling) out.push_back("supersampling");
   if (bvh) out.push_back("bvh");
+  if (screen_bins) out.push_back("screen-bins");
+  if (light_buffers) out.push_back("light-buffers");
   return out;
 }
 
@@ -54,6 +57,55 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
   p.bvh_spheres.reserve(p.spheres.size());
   for (std::int32_t i : p.bvh.order)
     p.bvh_spheres.push_back({p.spheres[i].centre, p.spheres[i].radius, i});
+}
+
+template <class T>
+void build_ray_culling(PreparedScene<T>& p) {
+  // The scene's scale: no sphere, light or the eye has a coordinate beyond it.
+  auto max_abs = [](const auto& v) {
+    return std::max({std::abs(static_cast<double>(v.x)), std::abs(static_cast<double>(v.y)),
+                     std::abs(static_cast<double>(v.z))});
+  };
+  double scale = max_abs(p.eye);
+  for (const PreparedSphere<T>& s : p.spheres)
+    scale = std::max(scale, max_abs(s.centre) + static_cast<double>(s.radius));
+  for (const PreparedLight<T>& l : p.lights) scale = std::max(scale, max_abs(l.location));
+  // Shadow rays are answered from points within `reach`. The tracer's sphere test and ray
+  // directions, in precision T, err by a few tens of epsilons of the coordinates involved
+  // (all within reach + scale); the margin is 256 epsilons of that.
+  const double eps = std::numeric_limits<T>::epsilon();
+  const double reach = 4 * scale;
+  const double margin = 256 * eps * (reach + scale);
+  std::vector<WidenedSphere> widened;
+  widened.reserve(p.spheres.size());
+  for (const PreparedSphere<T>& s : p.spheres)
+    widened.push_back({glm::dvec3(s.centre), static_cast<double>(s.radius) + margin});
+
+  // A primary ray's direction, from the pixel's screen point, errs by a few epsilons of the
+  // window and eye coordinates; in pixels, padded 16-fold, plus the jitter of sampling.
+  const double ww = static_cast<double>(p.world_width), wh = static_cast<double>(p.world_height);
+  const double span = ww + wh + max_abs(p.eye);
+  const double pad_x = 1.5 + 16 * eps * std::max(p.width - 1, 1) * span / ww;
+  const double pad_y = 1.5 + 16 * eps * std::max(p.height - 1, 1) * span / wh;
+  constexpr double kMaxPad = 64, kMaxCoverage = 64;
+  if (pad_x <= kMaxPad && pad_y <= kMaxPad) {
+    const ScreenCamera camera{glm::dvec3(p.eye), ww, wh, p.width, p.height, pad_x, pad_y};
+    p.screen_bins = build_screen_bins(camera, widened, kTileSize, kMaxCoverage);
+  }
+  p.features.screen_bins = !p.screen_bins.empty();
+
+  if (!p.features.shadows) return;
+  // Each buffer costs about one pass over the spheres; past this many, the rest of the
+  // lights keep the hierarchy.
+  constexpr double kMaxWork = 8e6;
+  const std::size_t lights =
+      std::min(p.lights.size(), static_cast<std::size_t>(kMaxWork / static_cast<double>(widened.size())));
+  p.light_buffers.resize(p.lights.size());
+  for (std::size_t i = 0; i < lights; ++i) {
+    p.light_buffers[i] = build_light_buffer(glm::dvec3(p.lights[i].location), widened, reach);
+    p.features.light_buffers = p.features.light_buffers || !p.light_buffers[i].empty();
+  }
+  if (!p.features.light_buffers) p.light_buffers.clear();
 }
 
 template <class T>
@@ -111,8 +163,30 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     for (size_t i = 0; i < p.materials.size(); ++i)
       p.materials[i].lit =
           nonzero(scene.materials[i].diffuse) || (f.highlight && p.materials[i].highlights);
-    // The reference (unspecialized) path always loops, so tests compare the two.
-    if (p.spheres.size() >= kBvhMinSpheres) build_sphere_bvh(p, build_threads);
+    // The reference (unspecialized) path always loops, so tests compare the two. The
+    // hierarchy and the culling structures are independent: with two threads or more they
+    // are built side by side.
+    if (p.spheres.size() >= kBvhMinSpheres) {
+      const int threads =
+          build_threads > 0 ? build_threads
+                            : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+      if (threads > 1) {
+        std::exception_ptr failure;  // (out of memory) rethrown here, not on the thread
+        std::thread culling([&] {
+          try {
+            build_ray_culling(p);
+          } catch (...) {
+            failure = std::current_exception();
+          }
+        });
+        build_sphere_bvh(p, threads - 1);
+        culling.join();
+        if (failure) std::rethrow_exception(failure);
+      } else {
+        build_ray_culling(p);
+        build_sphere_bvh(p, 1);
+      }
+    }
     f.bvh = !p.bvh.empty();
   } else {
     f.lights = true;
@@ -129,5 +203,7 @@ template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOpt
 template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int, int);
 template void build_sphere_bvh<float>(PreparedScene<float>&, int);
 template void build_sphere_bvh<double>(PreparedScene<double>&, int);
+template void build_ray_culling<float>(PreparedScene<float>&);
+template void build_ray_culling<double>(PreparedScene<double>&);
 
 }  // namespace rayfarm

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "bvh.h"
+#include "light_buffer.h"
+#include "screen_bins.h"
 #include "rayfarm/intersect.h"
 #include "rayfarm/options.h"
 #include "rayfarm/scene.h"
@@ -20,6 +22,8 @@ struct Features {
   bool lights = true;      // any light contributes at all
   bool supersampling = false;
   bool bvh = false;  // spheres behind a hierarchy instead of a loop
+  bool screen_bins = false;    // primary rays find their sphere by projection (screen_bins.h)
+  bool light_buffers = false;  // shadow rays test the spheres of one direction cell (light_buffer.h)
 
   std::vector<std::string> parts() const;
 };
@@ -86,7 +90,12 @@ struct PreparedScene {
 
   Bvh bvh;                                // empty: spheres are tested in a plain loop
   std::vector<BvhSphere<T>> bvh_spheres;  // the spheres in bvh.order
+  ScreenBins screen_bins;                 // empty: primary rays use `bvh`
+  std::vector<LightBuffer> light_buffers;  // per light (each may be empty), or none
 };
+
+// Side of the square tiles the renderer works in (and the screen bins are made for).
+inline constexpr int kTileSize = 32;
 
 // Below this many spheres a plain loop beats the hierarchy (tests/bench: BM_Closest*).
 inline constexpr std::size_t kBvhMinSpheres = 8;
@@ -100,5 +109,10 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
 // Puts the spheres behind a hierarchy (whatever their number); used by prepare_scene.
 template <class T>
 void build_sphere_bvh(PreparedScene<T>& scene, int threads);
+
+// Builds the screen bins and (with shadows on) the light buffers, where they pay; used by
+// prepare_scene for scenes with a hierarchy.
+template <class T>
+void build_ray_culling(PreparedScene<T>& scene);
 
 }  // namespace rayfarm

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "prepared_scene.h"
@@ -16,7 +17,6 @@ namespace rayfarm {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr int kTileSize = 32;
 
 double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
@@ -117,6 +117,9 @@ class TiledRender final : public RenderJob {
     const int x1 = std::min(x0 + kTileSize, s_.width), r1 = std::min(r0 + kTileSize, s_.height);
     bytes.resize(static_cast<size_t>(x1 - x0) * (r1 - r0) * 3);
     Tracer<T> tracer(s_);
+    const bool binned = !s_.screen_bins.empty();
+    std::vector<PrimaryRay> rays;
+    if (binned) first_hits(tile, pass, tracer, rays);
     const bool multi = s_.spp > 1;
     const double n = pass + 1;
     double tile_error = 0;
@@ -125,13 +128,13 @@ class TiledRender final : public RenderJob {
       if (cancel_.load(std::memory_order_relaxed)) return false;
       const int y = s_.height - 1 - r;  // the top image row is world row H-1
       for (int x = x0; x < x1; ++x) {
-        double u = 0, v = 0;
-        if (multi) {
-          PixelOffset o = sampler_.offset(s_.seed, x, y, pass);
-          u = o.u;
-          v = o.v;
+        Vec3<T> c;
+        if (binned) {
+          const PrimaryRay& ray = rays[static_cast<size_t>(r - r0) * (x1 - x0) + (x - x0)];
+          c = ray.dir ? tracer.primary(*ray.dir, ray.hit) : tracer.primary(pixel_point(x, y, pass));
+        } else {
+          c = tracer.primary(pixel_point(x, y, pass));
         }
-        Vec3<T> c = tracer.primary(screen_point(x, y, u, v));
         if (!multi) {
           for (int k = 0; k < 3; ++k) *out++ = to_byte(static_cast<double>(c[k]));
           continue;
@@ -153,6 +156,54 @@ class TiledRender final : public RenderJob {
     tile_error_[tile] = tile_error;
     counts = tracer.counts;
     return true;
+  }
+
+  struct PrimaryRay {
+    std::optional<Vec3<T>> dir;
+    Hit<T> hit;
+  };
+
+  // The closest hit of every primary ray of the tile, from its screen bin: each sphere is
+  // tested only on the pixels of its rectangle, nearest spheres first, and skipped on pixels
+  // where something nearer than all of it was already hit. Ties go to the lowest index
+  // (spheres before planes), as in Tracer::closest, so the hits are the loop's.
+  void first_hits(int tile, int pass, const Tracer<T>& tracer, std::vector<PrimaryRay>& rays) const {
+    const int x0 = (tile % tiles_x_) * kTileSize, r0 = (tile / tiles_x_) * kTileSize;
+    const int x1 = std::min(x0 + kTileSize, s_.width), r1 = std::min(r0 + kTileSize, s_.height);
+    const int w = x1 - x0;
+    rays.resize(static_cast<size_t>(w) * (r1 - r0));
+    const T t_max = s_.max_dist;
+    for (int r = r0; r < r1; ++r) {
+      for (int x = x0; x < x1; ++x) {
+        PrimaryRay& ray = rays[static_cast<size_t>(r - r0) * w + (x - x0)];
+        ray = {tracer.primary_direction(pixel_point(x, s_.height - 1 - r, pass)), Hit<T>{}};
+        // Planes first, so spheres behind the plane hit are skipped.
+        if (ray.dir) tracer.closest_plane(s_.eye, *ray.dir, Origin{}, t_max, ray.hit);
+      }
+    }
+    for (const ScreenBinEntry& e : s_.screen_bins.of_tile(tile)) {
+      const PreparedSphere<T>& sp = s_.spheres[e.sphere];
+      const double near = e.near;
+      const int ex0 = std::max<int>(e.x0, x0), ex1 = std::min<int>(e.x1, x1 - 1);
+      const int er0 = std::max<int>(e.r0, r0), er1 = std::min<int>(e.r1, r1 - 1);
+      for (int r = er0; r <= er1; ++r) {
+        PrimaryRay* ray = rays.data() + static_cast<size_t>(r - r0) * w + (ex0 - x0);
+        for (int x = ex0; x <= ex1; ++x, ++ray) {
+          Hit<T>& best = ray->hit;
+          if (!ray->dir || near > static_cast<double>(best.t)) continue;
+          const T t = sphere_t(s_.eye, *ray->dir, sp.centre, sp.radius, e.sphere, Origin{});
+          if (t > 0 && t <= t_max && (t < best.t || (t == best.t && e.sphere < best.object)))
+            best = {t, e.sphere};
+        }
+      }
+    }
+  }
+
+  // The world point of pixel (x, y) in pass `pass` (jittered when supersampling).
+  Vec3<T> pixel_point(int x, int y, int pass) const {
+    if (s_.spp <= 1) return screen_point(x, y, 0, 0);
+    PixelOffset o = sampler_.offset(s_.seed, x, y, pass);
+    return screen_point(x, y, o.u, o.v);
   }
 
   // The world point of pixel (x, y) displaced by (u, v) pixels (SPEC §3 camera mapping).

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "prepared_scene.h"
@@ -95,18 +96,37 @@ class Tracer {
 
   RayCounts counts;
 
+  // The unit direction from the eye through the world point `target` on the screen; none
+  // when the two coincide (or the distance overflows).
+  std::optional<Vec3<T>> primary_direction(const Vec3<T>& target) const {
+    Vec3<T> dir = target - s_.eye;
+    T len = glm::length(dir);
+    if (!(len > 0) || !std::isfinite(len)) return std::nullopt;
+    return dir / len;
+  }
+
   // Colour of the primary ray through the world point `target` on the screen.
   Vec3<T> primary(const Vec3<T>& target) {
     ++counts.primary;
-    Vec3<T> dir = target - s_.eye;
-    T len = glm::length(dir);
-    if (!(len > 0) || !std::isfinite(len)) return s_.background;
-    return trace(s_.eye, dir / len);
+    std::optional<Vec3<T>> dir = primary_direction(target);
+    return dir ? trace(s_.eye, *dir, nullptr) : s_.background;
+  }
+
+  // Colour of the primary ray along `dir` (from primary_direction) whose closest hit is
+  // already known (as closest() would give it).
+  Vec3<T> primary(const Vec3<T>& dir, const Hit<T>& first) {
+    ++counts.primary;
+    return trace(s_.eye, dir, &first);
   }
 
   // The nearest hit with 0 < t <= t_max; of equal t, the lowest object index (spheres
   // before planes). The hierarchy, when there is one, gives exactly the loop's answer.
   Hit<T> closest(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max) const {
+    // Planes first: a sphere beyond the nearest plane cannot be the answer, so the plane's t
+    // bounds the sphere search (a sphere at exactly that t still wins: lower index).
+    Hit<T> plane;
+    closest_plane(o, d, from, t_max, plane);
+    if (plane.object >= 0) t_max = plane.t;
     Hit<T> best;
     BvhRay ray;
     if (!s_.bvh.empty() && ray.init(o, d, s_.bvh.scale)) {
@@ -127,29 +147,46 @@ class Tracer {
         if (t > 0 && t <= t_max && t < best.t) best = {t, i};
       }
     }
+    return best.object >= 0 ? best : plane;
+  }
+
+  // Lets a plane nearer than `best` (spheres only so far) take its place.
+  void closest_plane(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max,
+                     Hit<T>& best) const {
     const int ns = static_cast<int>(s_.spheres.size());
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
       const T t = plane_t(o, d, s_.planes[j], ns + j, from);
       if (t > 0 && t <= t_max && t < best.t) best = {t, ns + j};
     }
-    return best;
   }
 
   // Whether anything lies at 0 < t < dist. Planes first: they are few and often block.
   // `last_blocker` (optional) names a sphere to try first and learns the one that blocked:
   // neighbouring shadow rays to one light are usually blocked by the same sphere. It can
-  // only make the answer come sooner, never change it.
+  // only make the answer come sooner, never change it. `light` (optional) is the buffer of
+  // the light at o + dist * d, for a shadow ray that ends there.
   bool occluded(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist,
-                int* last_blocker = nullptr) const {
+                int* last_blocker = nullptr, const LightBuffer* light = nullptr) const {
     const int ns = static_cast<int>(s_.spheres.size());
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
       const T t = plane_t(o, d, s_.planes[j], ns + j, from);
       if (t > 0 && t < dist) return true;
     }
-    if (last_blocker && *last_blocker >= 0) {
-      const PreparedSphere<T>& sp = s_.spheres[*last_blocker];
-      const T t = sphere_t(o, d, sp.centre, sp.radius, *last_blocker, from);
-      if (t > 0 && t < dist) return true;
+    auto blocks = [&](int i) {
+      const PreparedSphere<T>& sp = s_.spheres[i];
+      const T t = sphere_t(o, d, sp.centre, sp.radius, i, from);
+      return t > 0 && t < dist;
+    };
+    if (last_blocker && *last_blocker >= 0 && blocks(*last_blocker)) return true;
+    LightBuffer::Cell cell;
+    if (light && light->lookup(glm::dvec3(o), cell)) {
+      for (std::int32_t i : light->around)
+        if (blocks(i)) return remember(last_blocker, i);
+      for (const LightBufferEntry* e = cell.begin; e != cell.end; ++e) {
+        if (static_cast<double>(e->near) > cell.limit) break;  // nearest first: none further
+        if (blocks(e->sphere)) return remember(last_blocker, e->sphere);
+      }
+      return false;
     }
     BvhRay ray;
     if (!s_.bvh.empty() && ray.init(o, d, s_.bvh.scale)) {
@@ -158,35 +195,36 @@ class Tracer {
           s_.bvh, ray, float_limit_up(dist), [&](std::int32_t first, std::int32_t count) {
             for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp) {
               const T t = sphere_t(o, d, sp->centre, sp->radius, sp->index, from);
-              if (t > 0 && t < dist) {
-                if (last_blocker) *last_blocker = sp->index;
-                return true;
-              }
+              if (t > 0 && t < dist) return remember(last_blocker, sp->index);
             }
             return false;
           });
     }
-    for (int i = 0; i < ns; ++i) {
-      const PreparedSphere<T>& sp = s_.spheres[i];
-      const T t = sphere_t(o, d, sp.centre, sp.radius, i, from);
-      if (t > 0 && t < dist) return true;
-    }
+    for (int i = 0; i < ns; ++i)
+      if (blocks(i)) return true;
     return false;
   }
 
  private:
+  static bool remember(int* last_blocker, int sphere) {
+    if (last_blocker) *last_blocker = sphere;
+    return true;
+  }
+
   struct Level {
     Vec3<T> local;
     Vec3<T> weight;  // the material's specular: how much of the next level is added
   };
 
-  Vec3<T> trace(Vec3<T> origin, Vec3<T> dir) {
+  // `first`, when given, is the closest hit of the first ray.
+  Vec3<T> trace(Vec3<T> origin, Vec3<T> dir, const Hit<T>* first) {
     levels_.clear();
     Origin from;
     T travelled = 0;
     T path_weight = 1;
     for (int depth = 0;; ++depth) {
-      Hit<T> hit = closest(origin, dir, from, s_.max_dist - travelled);
+      Hit<T> hit =
+          depth == 0 && first ? *first : closest(origin, dir, from, s_.max_dist - travelled);
       if (hit.object < 0) {
         levels_.push_back({s_.background, Vec3<T>(0)});
         break;
@@ -243,9 +281,13 @@ class Tracer {
     const Vec3<T> ap = glm::abs(p);
     const T point_scale = std::max({ap.x, ap.y, ap.z});
     if (blockers_.size() != s_.lights.size()) blockers_.assign(s_.lights.size(), -1);
-    int* blocker = s_.bvh.empty() ? nullptr : blockers_.data();  // small scenes: just loop
-    for (const PreparedLight<T>& light : s_.lights) {
-      int* last_blocker = blocker ? blocker++ : nullptr;
+    const bool remember = !s_.bvh.empty();  // small scenes: just loop
+    for (std::size_t i = 0; i < s_.lights.size(); ++i) {
+      const PreparedLight<T>& light = s_.lights[i];
+      int* last_blocker = remember ? &blockers_[i] : nullptr;
+      const LightBuffer* light_buffer =
+          i < s_.light_buffers.size() && !s_.light_buffers[i].empty() ? &s_.light_buffers[i]
+                                                                       : nullptr;
       Vec3<T> l = light.location - p;
       T r = glm::length(l);
       // A light exactly at the shaded point has no direction: it contributes nothing.
@@ -264,7 +306,7 @@ class Tracer {
         ++counts.shadow;
         // A surface through the light itself (a light placed on an object) is not in the
         // way: hits within the rounding noise of the light's position do not block.
-        if (occluded(p, l, from, r - 4 * noise * r, last_blocker)) continue;
+        if (occluded(p, l, from, r - 4 * noise * r, last_blocker, light_buffer)) continue;
       }
       Vec3<T> term = m.diffuse * n_dot_l;
       if (s_.features.highlight && m.highlights) {
