@@ -61,36 +61,41 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
 
 template <class T>
 void build_ray_culling(PreparedScene<T>& p) {
-  // The scene's scale: no sphere, light or the eye has a coordinate beyond it.
+  // Scales: no sphere or light has a coordinate beyond `scale`, nor the eye beyond `view`.
   auto max_abs = [](const auto& v) {
     return std::max({std::abs(static_cast<double>(v.x)), std::abs(static_cast<double>(v.y)),
                      std::abs(static_cast<double>(v.z))});
   };
-  double scale = max_abs(p.eye);
+  double scale = 0;
   for (const PreparedSphere<T>& s : p.spheres)
     scale = std::max(scale, max_abs(s.centre) + static_cast<double>(s.radius));
   for (const PreparedLight<T>& l : p.lights) scale = std::max(scale, max_abs(l.location));
-  // Shadow rays are answered from points within `reach`. The tracer's sphere test and ray
-  // directions, in precision T, err by a few tens of epsilons of the coordinates involved
-  // (all within reach + scale); the margin is 256 epsilons of that.
+  const double view = std::max(scale, max_abs(p.eye));
+  // The tracer's sphere test and ray directions, in precision T, err by a few tens of
+  // epsilons of the coordinates involved; each structure widens the spheres by 256 epsilons
+  // of those: for primary rays the eye's and the scene's, for shadow rays those of points
+  // within `reach` (farther ones are not answered from the buffers) and the scene's.
   const double eps = std::numeric_limits<T>::epsilon();
   const double reach = 4 * scale;
-  const double margin = 256 * eps * (reach + scale);
-  std::vector<WidenedSphere> widened;
-  widened.reserve(p.spheres.size());
-  for (const PreparedSphere<T>& s : p.spheres)
-    widened.push_back({glm::dvec3(s.centre), static_cast<double>(s.radius) + margin});
+  auto widened = [&](double margin) {
+    std::vector<WidenedSphere> out;
+    out.reserve(p.spheres.size());
+    for (const PreparedSphere<T>& s : p.spheres)
+      out.push_back({glm::dvec3(s.centre), static_cast<double>(s.radius) + margin});
+    return out;
+  };
 
   // A primary ray's direction, from the pixel's screen point, errs by a few epsilons of the
   // window and eye coordinates; in pixels, padded 16-fold, plus the jitter of sampling.
   const double ww = static_cast<double>(p.world_width), wh = static_cast<double>(p.world_height);
-  const double span = ww + wh + max_abs(p.eye);
+  const double span = ww + wh + max_abs(p.eye);  // of the screen point and the eye
   const double pad_x = 1.5 + 16 * eps * std::max(p.width - 1, 1) * span / ww;
   const double pad_y = 1.5 + 16 * eps * std::max(p.height - 1, 1) * span / wh;
   constexpr double kMaxPad = 64, kMaxCoverage = 64;
   if (pad_x <= kMaxPad && pad_y <= kMaxPad) {
     const ScreenCamera camera{glm::dvec3(p.eye), ww, wh, p.width, p.height, pad_x, pad_y};
-    p.screen_bins = build_screen_bins(camera, widened, kTileSize, kMaxCoverage);
+    p.screen_bins =
+        build_screen_bins(camera, widened(256 * eps * 2 * view), kTileSize, kMaxCoverage);
   }
   p.features.screen_bins = !p.screen_bins.empty();
 
@@ -99,10 +104,11 @@ void build_ray_culling(PreparedScene<T>& p) {
   // lights keep the hierarchy.
   constexpr double kMaxWork = 8e6;
   const std::size_t lights =
-      std::min(p.lights.size(), static_cast<std::size_t>(kMaxWork / static_cast<double>(widened.size())));
+      std::min(p.lights.size(), static_cast<std::size_t>(kMaxWork / static_cast<double>(p.spheres.size())));
+  const std::vector<WidenedSphere> spheres = widened(256 * eps * (reach + scale));
   p.light_buffers.resize(p.lights.size());
   for (std::size_t i = 0; i < lights; ++i) {
-    p.light_buffers[i] = build_light_buffer(glm::dvec3(p.lights[i].location), widened, reach);
+    p.light_buffers[i] = build_light_buffer(glm::dvec3(p.lights[i].location), spheres, reach);
     p.features.light_buffers = p.features.light_buffers || !p.light_buffers[i].empty();
   }
   if (!p.features.light_buffers) p.light_buffers.clear();

@@ -1,0 +1,222 @@
+// Shadow rays answered from a light buffer are answered exactly as by the plain loop: from
+// every kind of shading point (sphere outsides and insides, the floor, coincident and
+// touching spheres), for lights outside the spheres, among them, inside one and on one,
+// for segments grazing the spheres' silhouettes, at extreme scales, in both precisions.
+#include "light_buffer.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "prepared_scene.h"
+#include "random_scene.h"
+#include "tracer.h"
+
+namespace rayfarm {
+namespace {
+
+using test::random_scene;
+using test::Rng;
+
+// The plain loop's scene and the specialized one (hierarchy, light buffers) side by side.
+template <class T>
+struct Pair {
+  PreparedScene<T> loop;
+  PreparedScene<T> fast;
+};
+
+template <class T>
+Pair<T> prepare_both(const Scene& scene) {
+  RenderOptions o;
+  o.specialize = false;
+  Pair<T> p{prepare_scene<T>(scene, o, 0), {}};
+  o.specialize = true;
+  p.fast = prepare_scene<T>(scene, o, 0);
+  return p;
+}
+
+// The four kinds of light position; the random scenes fill [-extent, extent]^3.
+void add_lights(Scene& s, double extent) {
+  s.lights.clear();
+  s.lights.push_back({"outside", {}, {0, 3 * extent, 0.5 * extent}, {1, 1, 1}});
+  s.lights.push_back({"among", {}, {0.1 * extent, 0.2 * extent, -0.3 * extent}, {1, 1, 1}});
+  const Sphere& a = s.spheres[0];
+  s.lights.push_back({"inside", {}, a.center + glm::dvec3(0.3 * a.radius, 0, 0), {1, 1, 1}});
+  const Sphere& b = s.spheres[1];
+  s.lights.push_back({"on", {}, b.center + glm::dvec3(0, b.radius, 0), {1, 1, 1}});
+}
+
+std::string light_name(const Scene& s, std::size_t i) { return s.lights[i].name; }
+
+struct Counts {
+  int rays = 0;
+  int blocked = 0;
+  int answered = 0;  // by the buffer, not its fallback
+};
+
+// A shadow ray to each light from the hit point of each random ray, as the tracer sends it.
+template <class T>
+Counts expect_same_shadows(const Scene& scene, Rng& rng, double extent, int rays) {
+  const Pair<T> p = prepare_both<T>(scene);
+  EXPECT_TRUE(p.fast.features.light_buffers);
+  EXPECT_TRUE(p.loop.light_buffers.empty());
+  const Tracer<T> loop(p.loop), fast(p.fast);
+  const int ns = static_cast<int>(p.loop.spheres.size());
+  const T inf = std::numeric_limits<T>::infinity();
+  Counts n;
+  for (int i = 0; i < rays; ++i) {
+    const Vec3<T> o(rng.point(rng.chance(0.3) ? 3 * extent : extent));
+    const Vec3<T> d(rng.direction());
+    const Hit<T> hit = loop.closest(o, d, {}, inf);
+    if (hit.object < 0) continue;
+    const Vec3<T> x = o + hit.t * d;
+    const Vec3<T> normal =
+        hit.object < ns ? x - p.loop.spheres[hit.object].centre : p.loop.planes[hit.object - ns].normal;
+    const Origin from{hit.object, glm::dot(normal, d) > 0};
+    for (std::size_t l = 0; l < p.loop.lights.size(); ++l) {
+      const PreparedLight<T>& light = p.loop.lights[l];
+      Vec3<T> to = light.location - x;
+      const T r = glm::length(to);
+      if (!(r > 0)) continue;
+      to /= r;
+      const T dist = r * (1 - 64 * std::numeric_limits<T>::epsilon());
+      const LightBuffer& buffer = p.fast.light_buffers[l];
+      const bool expected = loop.occluded(x, to, from, dist);
+      const bool got = fast.occluded(x, to, from, dist, nullptr, &buffer);
+      EXPECT_EQ(got, expected) << "ray " << i << " light " << light_name(scene, l)
+                               << " from object " << hit.object;
+      if (got != expected) return n;
+      LightBuffer::Cell cell;
+      n.answered += !buffer.empty() && buffer.lookup(glm::dvec3(x), cell);
+      n.blocked += expected;
+      ++n.rays;
+    }
+  }
+  return n;
+}
+
+Scene scaled(Scene s, double k) {
+  for (Sphere& sp : s.spheres) {
+    sp.center *= k;
+    sp.radius *= k;
+  }
+  for (Light& l : s.lights) l.location *= k;
+  for (Plane& pl : s.planes) pl.point *= k;
+  return s;
+}
+
+TEST(LightBuffer, ShadowsEqualTheLoopForEveryKindOfLightAndShadingPoint) {
+  Rng rng(11);
+  Scene scene = random_scene(rng, 1500, 4);
+  add_lights(scene, 4);
+  for (int precision = 0; precision < 2; ++precision) {
+    const Counts n = precision ? expect_same_shadows<float>(scene, rng, 4, 3000)
+                               : expect_same_shadows<double>(scene, rng, 4, 3000);
+    // Both answers occur, and the buffers (not their fallback) gave nearly all of them.
+    EXPECT_GT(n.blocked, n.rays / 10);
+    EXPECT_LT(n.blocked, n.rays - n.rays / 10);
+    EXPECT_GT(n.answered, n.rays * 3 / 4);
+  }
+}
+
+TEST(LightBuffer, ShadowsEqualTheLoopAtExtremeScales) {
+  Rng rng(12);
+  Scene scene = random_scene(rng, 800, 4);
+  add_lights(scene, 4);
+  for (double k : {1e-6, 1e6}) {
+    SCOPED_TRACE(k);
+    const Scene s = scaled(scene, k);
+    EXPECT_GT(expect_same_shadows<double>(s, rng, 4 * k, 1500).answered, 0);
+    EXPECT_GT(expect_same_shadows<float>(s, rng, 4 * k, 1500).answered, 0);
+  }
+}
+
+// Segments from beyond a sphere to the light that pass its centre at the radius to within
+// a few hundred ulps, on both sides: the cells must hold the sphere either way.
+template <class T>
+void expect_grazing_segments_agree(Rng& rng) {
+  Scene scene = test::base_scene();
+  for (int i = 0; i < 64; ++i) test::add_sphere(scene, rng.point(4), std::exp(rng.in(-5, 0)));
+  const glm::dvec3 light(0.5, 9, 0.25);
+  scene.lights = {{"l", {}, light, {1, 1, 1}}};
+  const Pair<T> p = prepare_both<T>(scene);
+  ASSERT_FALSE(p.fast.light_buffers.empty());
+  const Tracer<T> loop(p.loop), fast(p.fast);
+  int blocked = 0, rays = 0;
+  for (const Sphere& s : scene.spheres) {
+    const glm::dvec3 axis = glm::normalize(s.center - light);
+    const double dist = glm::length(s.center - light);
+    for (int k = 0; k < 40; ++k) {
+      // A line from the light at sin(angle) = r (1 + a few hundred ulps) / dist from the
+      // axis passes the centre at that many ulps of the radius.
+      const glm::dvec3 side = glm::normalize(glm::cross(axis, rng.direction()));
+      const double off = 1 + rng.in(-300, 300) * std::numeric_limits<T>::epsilon();
+      const double sine = std::min(1.0, s.radius * off / dist);
+      const glm::dvec3 u = std::sqrt(1 - sine * sine) * axis + sine * side;
+      const Vec3<T> x(light + u * rng.in(dist + s.radius * 1.01, 3 * dist + s.radius));
+      Vec3<T> to = Vec3<T>(light) - x;
+      const T r = glm::length(to);
+      to /= r;
+      const bool expected = loop.occluded(x, to, {}, r);
+      ASSERT_EQ(fast.occluded(x, to, {}, r, nullptr, &p.fast.light_buffers[0]), expected);
+      blocked += expected;
+      ++rays;
+    }
+  }
+  EXPECT_GT(blocked, rays / 10);
+  EXPECT_LT(blocked, rays - rays / 10);
+}
+
+TEST(LightBuffer, SegmentsGrazingASphereAgreeWithTheLoop) {
+  Rng rng(13);
+  expect_grazing_segments_agree<double>(rng);
+  expect_grazing_segments_agree<float>(rng);
+}
+
+TEST(LightBuffer, ListsSpheresAboutTheLightForEveryRayAndDeclinesWhatItCannotAnswer) {
+  const std::vector<WidenedSphere> spheres{{{0, 0, 0}, 1}, {{5, 0, 0}, 1}, {{0, 0, -7}, 2}};
+  const LightBuffer lb = build_light_buffer({0.5, 0, 0}, spheres, 100);
+  ASSERT_FALSE(lb.empty());
+  EXPECT_EQ(lb.around, std::vector<std::int32_t>{0});
+  LightBuffer::Cell cell;
+  // Towards +x the cell holds sphere 1 (and only it: sphere 2 lies towards -z).
+  ASSERT_TRUE(lb.lookup({10, 0, 0}, cell));
+  ASSERT_EQ(cell.end - cell.begin, 1);
+  EXPECT_EQ(cell.begin->sphere, 1);
+  EXPECT_FLOAT_EQ(cell.begin->near, 3.5f);
+  ASSERT_TRUE(lb.lookup({0.5, 0, -20}, cell));
+  ASSERT_EQ(cell.end - cell.begin, 1);
+  EXPECT_EQ(cell.begin->sphere, 2);
+  EXPECT_FALSE(lb.lookup({0.5, 0, 0}, cell));   // the light itself: no direction
+  EXPECT_FALSE(lb.lookup({101, 0, 0}, cell));   // beyond reach
+  EXPECT_FALSE(lb.lookup({NAN, 0, 0}, cell));
+}
+
+TEST(LightBuffer, IsNotBuiltWhenTooManySpheresSurroundTheLight) {
+  std::vector<WidenedSphere> nested;
+  for (int i = 1; i <= 40; ++i) nested.push_back({{0, 0, 0}, static_cast<double>(i)});
+  EXPECT_TRUE(build_light_buffer({0, 0, 0}, nested, 1e3).empty());
+  LightBufferLimits limits;
+  limits.max_around = 64;
+  EXPECT_FALSE(build_light_buffer({0, 0, 0}, nested, 1e3, limits).empty());
+}
+
+TEST(LightBuffer, IsUsedAndReportedOnlyWithShadowsAndWhenSpecialized) {
+  Rng rng(14);
+  Scene scene = random_scene(rng, 300, 4);
+  RenderOptions o;
+  auto has = [](const PreparedScene<double>& p) {
+    auto v = p.features.parts();
+    return std::find(v.begin(), v.end(), "light-buffers") != v.end();
+  };
+  EXPECT_TRUE(has(prepare_scene<double>(scene, o, 0)));
+  o.shadows = false;
+  EXPECT_FALSE(has(prepare_scene<double>(scene, o, 0)));
+  EXPECT_TRUE(prepare_scene<double>(scene, o, 0).light_buffers.empty());
+  o.shadows = true;
+  o.specialize = false;
+  EXPECT_FALSE(has(prepare_scene<double>(scene, o, 0)));
+}
+
+}  // namespace
+}  // namespace rayfarm
