@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "model_lexer.h"
@@ -30,8 +31,11 @@ struct Values {
 class FastLoader {
  public:
   explicit FastLoader(std::string_view text) : text_(text), lex_(text) {}
+  // A loader for the part of a file from a line start (see load_model_fast).
+  FastLoader(std::string_view rest, int first_line) : text_(rest), lex_(rest, first_line) {}
 
-  std::optional<Scene> run() {
+  // Reads every entity; false at the first thing that is not plainly valid.
+  bool parse() {
     // An entity takes at least one '{': enough room for all spheres without regrowth.
     size_t braces = 0;
     for (char c : text_) braces += c == '{';
@@ -41,11 +45,41 @@ class FastLoader {
     names_[static_cast<int>(EntityKind::sphere)].reserve(braces);
     for (;;) {
       const Token t = lex_.next();
-      if (t.kind == Token::end) break;
-      if (t.kind != Token::word) return std::nullopt;
+      if (t.kind == Token::end) return true;
+      if (t.kind != Token::word) return false;
       const EntitySpec* spec = find_entity(t.text);
-      if (!spec || !entity(*spec, t)) return std::nullopt;
+      if (!spec || !entity(*spec, t)) return false;
     }
+  }
+
+  // Appends the entities of the part of the file that follows this one; false if a name
+  // there repeats one here.
+  bool append(FastLoader&& rest) {
+    auto unique = [&](EntityKind kind, const auto& objects) {
+      for (const auto& o : objects)
+        if (!o.name.empty() && names_[static_cast<int>(kind)].find(o.name)) return false;
+      return true;
+    };
+    Scene& more = rest.scene_;
+    if (!unique(EntityKind::camera, more.cameras) || !unique(EntityKind::material, more.materials) ||
+        !unique(EntityKind::light, more.lights) || !unique(EntityKind::sphere, more.spheres) ||
+        !unique(EntityKind::plane, more.planes))
+      return false;
+    auto move_all = [](auto& to, auto& from) {
+      to.insert(to.end(), std::make_move_iterator(from.begin()), std::make_move_iterator(from.end()));
+    };
+    move_all(scene_.cameras, more.cameras);
+    move_all(scene_.materials, more.materials);
+    move_all(scene_.lights, more.lights);
+    move_all(scene_.spheres, more.spheres);
+    move_all(scene_.planes, more.planes);
+    move_all(sphere_materials_, rest.sphere_materials_);
+    move_all(plane_materials_, rest.plane_materials_);
+    return true;
+  }
+
+  // The whole file's checks, once every entity is read.
+  std::optional<Scene> finish() {
     if (scene_.cameras.empty()) return std::nullopt;
     // Materials may be defined after the objects that use them: resolve at the end.
     NameSet<int> materials;
@@ -152,8 +186,43 @@ class FastLoader {
   std::vector<std::string_view> sphere_materials_, plane_materials_;
 };
 
+// Where a large file can be cut in two: the start of a line that begins with an entity
+// keyword, just after a line that ends with '}'; npos if none is near the middle. A cut at
+// a line start never falls inside a token or a comment, and if it fell inside an entity,
+// one of the parts would not parse and the whole file is read in one piece after all.
+size_t split_point(std::string_view text) {
+  constexpr size_t kSearch = 1 << 16;
+  const size_t end = std::min(text.size(), text.size() / 2 + kSearch);
+  for (size_t i = text.find('\n', text.size() / 2); i != std::string_view::npos && i < end;
+       i = text.find('\n', i + 1)) {
+    size_t k = i;
+    while (k > 0 && (text[k - 1] == ' ' || text[k - 1] == '\t' || text[k - 1] == '\r')) --k;
+    if (k == 0 || text[k - 1] != '}') continue;
+    size_t w = i + 1;
+    while (w < text.size() && ((text[w] >= 'a' && text[w] <= 'z') || (text[w] >= 'A' && text[w] <= 'Z')))
+      ++w;
+    if (w > i + 1 && find_entity(text.substr(i + 1, w - i - 1))) return i + 1;
+  }
+  return std::string_view::npos;
+}
+
 }  // namespace
 
-std::optional<Scene> load_model_fast(std::string_view text) { return FastLoader(text).run(); }
+std::optional<Scene> load_model_fast(std::string_view text, std::size_t parallel_min) {
+  if (text.size() >= parallel_min && std::thread::hardware_concurrency() > 1) {
+    if (const size_t cut = split_point(text); cut != std::string_view::npos) {
+      const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + cut, '\n'));
+      FastLoader head(text.substr(0, cut)), tail(text.substr(cut), line);
+      bool tail_ok = false;
+      std::thread reader([&] { tail_ok = tail.parse(); });
+      const bool head_ok = head.parse();
+      reader.join();
+      if (head_ok && tail_ok && head.append(std::move(tail))) return head.finish();
+    }
+  }
+  FastLoader whole(text);
+  if (!whole.parse()) return std::nullopt;
+  return whole.finish();
+}
 
 }  // namespace rayfarm

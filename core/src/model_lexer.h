@@ -42,6 +42,8 @@ struct Token {
 class ModelLexer {
  public:
   explicit ModelLexer(std::string_view text);
+  // A lexer for the rest of a file from a line start, `first_line` being that line's number.
+  ModelLexer(std::string_view rest, int first_line) : text_(rest), line_(first_line) {}
 
   const Token& peek(int ahead = 0) {
     while (buffered_ <= ahead) buffer_[buffered_++] = scan();

@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "model_fast.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/json_scene.h"
 #include "rayfarm/lint.h"
@@ -68,6 +69,9 @@ int model_parser(const std::uint8_t* data, std::size_t size) {
     const LoadedScene quick = load_scene(text, LoadDetail::scene);
     check(quick.scene.has_value() == scene.has_value(), "fast path and full parser disagree");
     check(!scene || *quick.scene == *scene, "fast path built another scene");
+    const std::optional<Scene> halves = load_model_fast(text, 0);  // read in two parts
+    check(halves.has_value() == quick.scene.has_value(), "the two-part read decides otherwise");
+    check(!halves || *halves == *quick.scene, "the two-part read built another scene");
   }
   if (!scene) return 0;
   Diagnostics lints;
