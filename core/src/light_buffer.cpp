@@ -95,6 +95,7 @@ bool LightBuffer::lookup(const glm::dvec3& p, Cell& cell) const {
                         cell_of(f.b / f.major, n);
   cell.begin = entries.data() + start[c];
   cell.end = entries.data() + start[c + 1];
+  __builtin_prefetch(cell.begin);  // the caller reads it after other work
   return true;
 }
 

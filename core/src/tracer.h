@@ -167,6 +167,9 @@ class Tracer {
   // the light at o + dist * d, for a shadow ray that ends there.
   bool occluded(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist,
                 int* last_blocker = nullptr, const LightBuffer* light = nullptr) const {
+    // The cell first: its entries load while the planes and the last blocker are tested.
+    LightBuffer::Cell cell;
+    const bool buffered = light && light->lookup(glm::dvec3(o), cell);
     const int ns = static_cast<int>(s_.spheres.size());
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
       const T t = plane_t(o, d, s_.planes[j], ns + j, from);
@@ -178,8 +181,7 @@ class Tracer {
       return t > 0 && t < dist;
     };
     if (last_blocker && *last_blocker >= 0 && blocks(*last_blocker)) return true;
-    LightBuffer::Cell cell;
-    if (light && light->lookup(glm::dvec3(o), cell)) {
+    if (buffered) {
       for (std::int32_t i : light->around)
         if (blocks(i)) return remember(last_blocker, i);
       for (const LightBufferEntry* e = cell.begin; e != cell.end; ++e) {
