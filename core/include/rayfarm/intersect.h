@@ -22,8 +22,10 @@ struct Roots {
 // Ray Tracing Gems ch. 7: the discriminant as r^2 - |f - (f.d) d|^2 (no difference of two
 // large squares), the larger-magnitude root q = -(b + sign(b) sqrt(D)), the other as c/q.
 template <class T>
-std::optional<Roots<T>> sphere_roots(const Vec3<T>& o, const Vec3<T>& d, const Vec3<T>& centre,
-                                     T radius) {
+[[gnu::always_inline]] inline std::optional<Roots<T>> sphere_roots(const Vec3<T>& o,
+                                                                   const Vec3<T>& d,
+                                                                   const Vec3<T>& centre,
+                                                                   T radius) {
   Vec3<T> f = o - centre;
   T b = glm::dot(f, d);
   Vec3<T> l = f - b * d;
