@@ -178,11 +178,7 @@ LightBuffer build_light_buffer(const glm::dvec3& light, std::span<const WidenedS
   std::vector<std::uint32_t> fill(lb.start.begin(), lb.start.end() - 1);
   for (const Rect& r : rects)
     for_cells(r, [&](std::size_t c) { lb.entries[fill[c]++] = {r.sphere, near[r.sphere]}; });
-  for (std::size_t c = 0; c < cells; ++c)
-    std::sort(lb.entries.begin() + lb.start[c], lb.entries.begin() + lb.start[c + 1],
-              [](const LightBufferEntry& x, const LightBufferEntry& y) {
-                return x.near < y.near || (x.near == y.near && x.sphere < y.sphere);
-              });
+  sort_buckets_nearest_first(lb.entries, lb.start);
   return lb;
 }
 

@@ -111,11 +111,7 @@ ScreenBins build_screen_bins(const ScreenCamera& cam, std::span<const WidenedSph
                            static_cast<std::uint16_t>(r.r1)};
     for_tiles(r, [&](std::size_t t) { bins.entries[fill[t]++] = e; });
   }
-  for (std::size_t t = 0; t < tiles; ++t)
-    std::sort(bins.entries.begin() + bins.start[t], bins.entries.begin() + bins.start[t + 1],
-              [](const ScreenBinEntry& a, const ScreenBinEntry& b) {
-                return a.near < b.near || (a.near == b.near && a.sphere < b.sphere);
-              });
+  sort_buckets_nearest_first(bins.entries, bins.start);
   return bins;
 }
 
