@@ -135,17 +135,19 @@ LightBuffer build_light_buffer(const glm::dvec3& light, std::span<const WidenedS
     n = static_cast<int>(std::clamp(cells, 1.0, static_cast<double>(limits.max_cells_per_side)));
   }
 
+  // Rectangles sphere by sphere, nearest first, so that every cell is filled nearest first.
+  const std::vector<std::int32_t> order = order_by_near(near);
   std::vector<Rect> rects;
   for (;;) {
     rects.clear();
     double total = 0;
-    for (std::size_t i = 0; i < spheres.size(); ++i) {
+    for (std::int32_t i : order) {
       if (near[i] == -std::numeric_limits<float>::infinity()) continue;
       const double rr = spheres[i].radius;
       const glm::dvec3 lo = spheres[i].centre - rr, hi = spheres[i].centre + rr;
       const double clip = static_cast<double>(near[i]) / std::sqrt(3.0) * (1 - 1e-9);
       const std::size_t first = rects.size();
-      face_rects(static_cast<std::int32_t>(i), lo, hi, light, clip, n, rects);
+      face_rects(i, lo, hi, light, clip, n, rects);
       for (std::size_t r = first; r < rects.size(); ++r)
         total += (rects[r].a1 - rects[r].a0 + 1.0) * (rects[r].b1 - rects[r].b0 + 1.0);
     }
@@ -178,7 +180,6 @@ LightBuffer build_light_buffer(const glm::dvec3& light, std::span<const WidenedS
   std::vector<std::uint32_t> fill(lb.start.begin(), lb.start.end() - 1);
   for (const Rect& r : rects)
     for_cells(r, [&](std::size_t c) { lb.entries[fill[c]++] = {r.sphere, near[r.sphere]}; });
-  sort_buckets_nearest_first(lb.entries, lb.start);
   return lb;
 }
 

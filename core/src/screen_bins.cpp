@@ -101,17 +101,18 @@ ScreenBins build_screen_bins(const ScreenCamera& cam, std::span<const WidenedSph
     if (visible[i]) for_tiles(rects[i], [&](std::size_t t) { ++bins.start[t + 1]; });
   for (std::size_t t = 0; t < tiles; ++t) bins.start[t + 1] += bins.start[t];
   bins.entries.resize(bins.start[tiles]);
+  std::vector<float> near(spheres.size());
+  for (std::size_t i = 0; i < spheres.size(); ++i)
+    near[i] = float_down(glm::length(spheres[i].centre - cam.eye) - spheres[i].radius);
   std::vector<std::uint32_t> fill(bins.start.begin(), bins.start.end() - 1);
-  for (std::size_t i = 0; i < spheres.size(); ++i) {
+  for (std::int32_t i : order_by_near(near)) {  // so that each tile lists nearest first
     if (!visible[i]) continue;
     const Rect& r = rects[i];
-    const float near = float_down(glm::length(spheres[i].centre - cam.eye) - spheres[i].radius);
-    const ScreenBinEntry e{static_cast<std::int32_t>(i), near, static_cast<std::uint16_t>(r.x0),
+    const ScreenBinEntry e{i, near[i], static_cast<std::uint16_t>(r.x0),
                            static_cast<std::uint16_t>(r.x1), static_cast<std::uint16_t>(r.r0),
                            static_cast<std::uint16_t>(r.r1)};
     for_tiles(r, [&](std::size_t t) { bins.entries[fill[t]++] = e; });
   }
-  sort_buckets_nearest_first(bins.entries, bins.start);
   return bins;
 }
 
