@@ -86,11 +86,13 @@ void build_ray_culling(PreparedScene<T>& p) {
   };
 
   // A primary ray's direction, from the pixel's screen point, errs by a few epsilons of the
-  // window and eye coordinates; in pixels, padded 16-fold, plus the jitter of sampling.
+  // window and eye coordinates; in pixels, padded 16-fold, plus half a pixel to spare and
+  // the jitter of sampling.
   const double ww = static_cast<double>(p.world_width), wh = static_cast<double>(p.world_height);
   const double span = ww + wh + max_abs(p.eye);  // of the screen point and the eye
-  const double pad_x = 1.5 + 16 * eps * std::max(p.width - 1, 1) * span / ww;
-  const double pad_y = 1.5 + 16 * eps * std::max(p.height - 1, 1) * span / wh;
+  const double jitter = p.spp > 1 ? 0.5 : 0.0;
+  const double pad_x = 0.5 + jitter + 16 * eps * std::max(p.width - 1, 1) * span / ww;
+  const double pad_y = 0.5 + jitter + 16 * eps * std::max(p.height - 1, 1) * span / wh;
   constexpr double kMaxPad = 64, kMaxCoverage = 64;
   if (pad_x <= kMaxPad && pad_y <= kMaxPad) {
     const ScreenCamera camera{glm::dvec3(p.eye), ww, wh, p.width, p.height, pad_x, pad_y};

@@ -1,6 +1,6 @@
-// Screen bin construction: each widened sphere's box is projected through the eye onto the
-// screen plane (exact bounds: over a box in front of the eye, the projection is extreme at
-// its corners), turned into a padded pixel rectangle and entered in every tile it reaches.
+// Screen bin construction: each widened sphere's outline, seen from the eye, is bounded on
+// the screen plane by its tangents along each axis, turned into a padded pixel rectangle and
+// entered in every tile it reaches.
 #include "screen_bins.h"
 
 #include <algorithm>
@@ -33,34 +33,49 @@ bool pixel_range(double smin, double smax, double world, int count, double pad, 
   return true;
 }
 
+// Where on the screen (z = 0) the lines from the eye meet a sphere, along one screen axis:
+// a column (or row) is reachable when the plane through the eye and it, parallel to the other
+// axis, cuts the sphere; in the plane of this axis and z that is the disc (c, r) seen from
+// the eye (e, ez), and the range lies between its two tangents. The disc must lie wholly in
+// front of the eye. False when a tangent runs (nearly) parallel to the screen.
+bool tangent_range(double e, double ez, double c, double cz, double r, double& lo, double& hi) {
+  const double va = c - e, vz = cz - ez;
+  const double d2 = va * va + vz * vz;
+  r += 1e-9 * std::sqrt(d2);  // the rounding below, many times over
+  const double h2 = d2 - r * r;
+  if (!(h2 > 0)) return false;
+  const double h = std::sqrt(h2);
+  double at[2];
+  for (int k = 0; k < 2; ++k) {
+    const double sign = k ? 1.0 : -1.0;
+    // The tangent direction: v turned by the angle whose sine is r / |v|.
+    const double ua = h * va - sign * r * vz, uz = h * vz + sign * r * va;
+    if (!(uz * -ez > 0)) return false;  // towards the screen, or no bound
+    at[k] = e - ez * ua / uz;
+  }
+  lo = std::min(at[0], at[1]);
+  hi = std::max(at[0], at[1]);
+  return std::isfinite(lo) && std::isfinite(hi);
+}
+
 // The rectangle of pixels whose primary rays can meet the sphere; false if no ray can.
 bool sphere_rect(const ScreenCamera& cam, const WidenedSphere& s, Rect& out) {
   const glm::dvec3& e = cam.eye;
-  const glm::dvec3 lo = s.centre - s.radius, hi = s.centre + s.radius;
   // Along a primary ray, w = (ez - z) / ez runs from 0 at the eye to 1 on the screen.
-  const double w_lo = (e.z - lo.z) / e.z, w_hi = (e.z - hi.z) / e.z;
+  const double w_lo = (e.z - (s.centre.z - s.radius)) / e.z;
+  const double w_hi = (e.z - (s.centre.z + s.radius)) / e.z;
   const double w_min = std::min(w_lo, w_hi), w_max = std::max(w_lo, w_hi);
   if (!(w_max > 0)) return false;  // wholly behind the eye
-  if (!(w_min > 0)) {              // around the eye's plane: any ray may meet it
-    out = {0, cam.width - 1, 0, cam.height - 1};
-    return true;
-  }
-  double sx[2] = {INFINITY, -INFINITY}, sy[2] = {INFINITY, -INFINITY};
-  for (double w : {w_lo, w_hi}) {
-    for (double x : {lo.x, hi.x}) {
-      const double v = e.x + (x - e.x) / w;
-      sx[0] = std::min(sx[0], v);
-      sx[1] = std::max(sx[1], v);
-    }
-    for (double y : {lo.y, hi.y}) {
-      const double v = e.y + (y - e.y) / w;
-      sy[0] = std::min(sy[0], v);
-      sy[1] = std::max(sy[1], v);
-    }
-  }
-  int y0, y1;
-  if (!pixel_range(sx[0], sx[1], cam.world_width, cam.width, cam.pad_x, out.x0, out.x1) ||
-      !pixel_range(sy[0], sy[1], cam.world_height, cam.height, cam.pad_y, y0, y1))
+  const Rect all{0, cam.width - 1, 0, cam.height - 1};
+  out = all;
+  if (!(w_min > 0)) return true;  // around the eye's plane: any ray may meet it
+  double x_lo, x_hi, y_lo, y_hi;
+  int y0 = 0, y1 = cam.height - 1;
+  if (tangent_range(e.x, e.z, s.centre.x, s.centre.z, s.radius, x_lo, x_hi) &&
+      !pixel_range(x_lo, x_hi, cam.world_width, cam.width, cam.pad_x, out.x0, out.x1))
+    return false;
+  if (tangent_range(e.y, e.z, s.centre.y, s.centre.z, s.radius, y_lo, y_hi) &&
+      !pixel_range(y_lo, y_hi, cam.world_height, cam.height, cam.pad_y, y0, y1))
     return false;
   out.r0 = cam.height - 1 - y1;  // world row y is image row H-1-y
   out.r1 = cam.height - 1 - y0;
