@@ -15,10 +15,11 @@ namespace {
 constexpr double kFacePad = 1e-9;
 
 // The cell along one side holding face coordinate u. Monotonic in u, and the same function
-// for building and looking up, so a coordinate inside a sphere's range gets one of its cells.
+// for building and looking up, so a coordinate within kFacePad of a sphere's range gets one
+// of its cells. (Truncation is floor here: below 0 both are clamped to cell 0.)
 inline int cell_of(double u, int n) {
   u = std::clamp(u, -2.0, 2.0);  // also keeps the int conversion in range
-  const int c = static_cast<int>(std::floor((u + 1.0) * (0.5 * n)));
+  const int c = static_cast<int>((u + 1.0) * (0.5 * n));
   return std::clamp(c, 0, n - 1);
 }
 
@@ -84,15 +85,17 @@ bool LightBuffer::lookup(const glm::dvec3& p, Cell& cell) const {
   const FaceCoords f = face_coords(v);
   if (!(f.major > 0)) return false;
   // The segment from p to the light stays within |v| of the light.
-  cell.limit = glm::length(v) * (1 + 1e-12);
+  cell.limit_sq = glm::dot(v, v) * (1 + 1e-12);
   const std::int32_t base = face_base[f.face];
   if (base < 0) {
     cell.begin = cell.end = nullptr;
     return true;
   }
+  // One reciprocal for both coordinates: its rounding is far inside kFacePad.
+  const double inv = 1 / f.major;
   const std::size_t c = static_cast<std::size_t>(base) +
-                        static_cast<std::size_t>(cell_of(f.a / f.major, n)) * n +
-                        cell_of(f.b / f.major, n);
+                        static_cast<std::size_t>(cell_of(f.a * inv, n)) * n +
+                        cell_of(f.b * inv, n);
   cell.begin = entries.data() + start[c];
   cell.end = entries.data() + start[c + 1];
   __builtin_prefetch(cell.begin);  // the caller reads it after other work

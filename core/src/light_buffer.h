@@ -40,7 +40,7 @@ struct LightBuffer {
   struct Cell {
     const LightBufferEntry* begin = nullptr;
     const LightBufferEntry* end = nullptr;
-    double limit = 0;  // entries whose `near` exceeds this cannot block
+    double limit_sq = 0;  // entries whose `near` squared exceeds this cannot block
   };
   // The cell a shadow ray from p belongs to, or false where the buffer cannot answer (p at
   // the light, p beyond `reach`, a non-finite p): the caller then tests another way. The

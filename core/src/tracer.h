@@ -185,7 +185,8 @@ class Tracer {
       for (std::int32_t i : light->around)
         if (blocks(i)) return remember(last_blocker, i);
       for (const LightBufferEntry* e = cell.begin; e != cell.end; ++e) {
-        if (static_cast<double>(e->near) > cell.limit) break;  // nearest first: none further
+        const double near = e->near;  // > 0: spheres about the light are not in cells
+        if (near * near > cell.limit_sq) break;  // nearest first: none further can block
         if (blocks(e->sphere)) return remember(last_blocker, e->sphere);
       }
       return false;
