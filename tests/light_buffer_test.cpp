@@ -9,6 +9,7 @@
 #include <algorithm>
 
 #include "prepared_scene.h"
+#include "rayfarm/render.h"
 #include "random_scene.h"
 #include "tracer.h"
 
@@ -216,6 +217,30 @@ TEST(LightBuffer, IsUsedAndReportedOnlyWithShadowsAndWhenSpecialized) {
   o.shadows = true;
   o.specialize = false;
   EXPECT_FALSE(has(prepare_scene<double>(scene, o, 0)));
+}
+
+TEST(LightBuffer, ManyLightsShareAMemoryBudgetAndTheRestKeepTheHierarchy) {
+  Rng rng(15);
+  Scene scene = random_scene(rng, 300, 4);
+  scene.lights.clear();
+  for (int i = 0; i < 40; ++i)
+    scene.lights.push_back({"l" + std::to_string(i), {}, rng.point(12), {0.05, 0.05, 0.05}});
+  const PreparedScene<double> p = prepare_scene<double>(scene, {}, 0);
+  std::size_t built = 0, entries = 0;
+  for (const LightBuffer& lb : p.light_buffers) {
+    built += !lb.empty();
+    entries += lb.entries.size();
+  }
+  EXPECT_GT(built, 0u);
+  EXPECT_LT(built, scene.lights.size());
+  // The budget (64 entries a sphere), overshot by one buffer (48 a sphere at most).
+  EXPECT_LE(entries, (64 + 48) * scene.spheres.size());
+  RenderOptions o;
+  o.width = 40;
+  o.height = 30;
+  const Image fast = render_image(scene, o, 2);
+  o.specialize = false;
+  EXPECT_EQ(render_image(scene, o, 1), fast);
 }
 
 }  // namespace

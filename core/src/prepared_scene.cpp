@@ -102,15 +102,19 @@ void build_ray_culling(PreparedScene<T>& p) {
   p.features.screen_bins = !p.screen_bins.empty();
 
   if (!p.features.shadows) return;
-  // Each buffer costs about one pass over the spheres; past this many, the rest of the
+  // Each buffer costs about one pass over the spheres and a few entries per sphere: past
+  // these budgets (time, and memory a small multiple of the scene's), the rest of the
   // lights keep the hierarchy.
   constexpr double kMaxWork = 8e6;
+  const double max_entries = 64.0 * static_cast<double>(p.spheres.size());
   const std::size_t lights =
       std::min(p.lights.size(), static_cast<std::size_t>(kMaxWork / static_cast<double>(p.spheres.size())));
   const std::vector<WidenedSphere> spheres = widened(256 * eps * (reach + scale));
   p.light_buffers.resize(p.lights.size());
-  for (std::size_t i = 0; i < lights; ++i) {
+  double entries = 0;
+  for (std::size_t i = 0; i < lights && entries <= max_entries; ++i) {
     p.light_buffers[i] = build_light_buffer(glm::dvec3(p.lights[i].location), spheres, reach);
+    entries += static_cast<double>(p.light_buffers[i].entries.size());
     p.features.light_buffers = p.features.light_buffers || !p.light_buffers[i].empty();
   }
   if (!p.features.light_buffers) p.light_buffers.clear();
