@@ -59,6 +59,9 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
     p.bvh_spheres.push_back({p.spheres[i].centre, p.spheres[i].radius, i});
 }
 
+namespace {
+
+// Builds the screen bins and (with shadows on) the light buffers, where they pay.
 template <class T>
 void build_ray_culling(PreparedScene<T>& p) {
   // Scales: no sphere or light has a coordinate beyond `scale`, nor the eye beyond `view`.
@@ -119,6 +122,8 @@ void build_ray_culling(PreparedScene<T>& p) {
   }
   if (!p.features.light_buffers) p.light_buffers.clear();
 }
+
+}  // namespace
 
 template <class T>
 PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera,
@@ -215,7 +220,5 @@ template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOpt
 template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int, int);
 template void build_sphere_bvh<float>(PreparedScene<float>&, int);
 template void build_sphere_bvh<double>(PreparedScene<double>&, int);
-template void build_ray_culling<float>(PreparedScene<float>&);
-template void build_ray_culling<double>(PreparedScene<double>&);
 
 }  // namespace rayfarm

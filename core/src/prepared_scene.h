@@ -110,9 +110,4 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
 template <class T>
 void build_sphere_bvh(PreparedScene<T>& scene, int threads);
 
-// Builds the screen bins and (with shadows on) the light buffers, where they pay; used by
-// prepare_scene for scenes with a hierarchy.
-template <class T>
-void build_ray_culling(PreparedScene<T>& scene);
-
 }  // namespace rayfarm

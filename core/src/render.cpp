@@ -110,11 +110,19 @@ class TiledRender final : public RenderJob {
  private:
   int tile_count() const { return tiles_x_ * tiles_y_; }
 
+  // A tile's columns [x0, x1) and image rows [r0, r1) (row 0 at the top).
+  struct TileBounds {
+    int x0, x1, r0, r1;
+  };
+  TileBounds bounds_of(int tile) const {
+    const int x0 = (tile % tiles_x_) * kTileSize, r0 = (tile / tiles_x_) * kTileSize;
+    return {x0, std::min(x0 + kTileSize, s_.width), r0, std::min(r0 + kTileSize, s_.height)};
+  }
+
   // Renders one tile of one pass into `bytes` (its rows top to bottom). Returns false when
   // canceled part way.
   bool render_tile(int tile, int pass, std::vector<std::uint8_t>& bytes, RayCounts& counts) {
-    const int x0 = (tile % tiles_x_) * kTileSize, r0 = (tile / tiles_x_) * kTileSize;
-    const int x1 = std::min(x0 + kTileSize, s_.width), r1 = std::min(r0 + kTileSize, s_.height);
+    const auto [x0, x1, r0, r1] = bounds_of(tile);
     bytes.resize(static_cast<size_t>(x1 - x0) * (r1 - r0) * 3);
     Tracer<T> tracer(s_);
     const bool binned = !s_.screen_bins.empty();
@@ -168,8 +176,7 @@ class TiledRender final : public RenderJob {
   // where something nearer than all of it was already hit. Ties go to the lowest index
   // (spheres before planes), as in Tracer::closest, so the hits are the loop's.
   void first_hits(int tile, int pass, const Tracer<T>& tracer, std::vector<PrimaryRay>& rays) const {
-    const int x0 = (tile % tiles_x_) * kTileSize, r0 = (tile / tiles_x_) * kTileSize;
-    const int x1 = std::min(x0 + kTileSize, s_.width), r1 = std::min(r0 + kTileSize, s_.height);
+    const auto [x0, x1, r0, r1] = bounds_of(tile);
     const int w = x1 - x0;
     rays.resize(static_cast<size_t>(w) * (r1 - r0));
     const T t_max = s_.max_dist;
@@ -217,9 +224,8 @@ class TiledRender final : public RenderJob {
   }
 
   void copy_tile(int tile, const std::vector<std::uint8_t>& bytes) {
-    const int x0 = (tile % tiles_x_) * kTileSize, r0 = (tile / tiles_x_) * kTileSize;
-    const int w = std::min(kTileSize, s_.width - x0);
-    const int rows = std::min(kTileSize, s_.height - r0);
+    const auto [x0, x1, r0, r1] = bounds_of(tile);
+    const int w = x1 - x0, rows = r1 - r0;
     for (int r = 0; r < rows; ++r)
       std::copy_n(bytes.data() + static_cast<size_t>(r) * w * 3, w * 3, image_.row(r0 + r) + x0 * 3);
   }

@@ -150,7 +150,7 @@ class Tracer {
     return best.object >= 0 ? best : plane;
   }
 
-  // Lets a plane nearer than `best` (spheres only so far) take its place.
+  // Lets the nearest plane with 0 < t <= t_max take best's place if it is nearer.
   void closest_plane(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max,
                      Hit<T>& best) const {
     const int ns = static_cast<int>(s_.spheres.size());
