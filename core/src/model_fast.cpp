@@ -217,7 +217,10 @@ std::optional<Scene> load_model_fast(std::string_view text, std::size_t parallel
       std::thread reader([&] { tail_ok = tail.parse(); });
       const bool head_ok = head.parse();
       reader.join();
-      if (head_ok && tail_ok && head.append(std::move(tail))) return head.finish();
+      // Both parts read: the cut was at an entity boundary, so the answer is final (a name
+      // repeated across the cut fails in one piece too). Otherwise read it in one piece.
+      if (head_ok && tail_ok)
+        return head.append(std::move(tail)) ? head.finish() : std::nullopt;
     }
   }
   FastLoader whole(text);
