@@ -55,7 +55,9 @@ ApiError scene_error(const Diagnostics& diags) {
 // and its JSON twin share results) and every option that changes pixels.
 std::string content_key(const SceneDesc& desc, RenderOptions options) {
   options.format = ImageFormat::png;
-  return sha256_hex(write_json(desc) + "\n" + canonical_string(options)).substr(0, 40);
+  return sha256_hex("render-version " + std::to_string(kRenderVersion) + "\n" + write_json(desc) +
+                    "\n" + canonical_string(options))
+      .substr(0, 40);
 }
 
 }  // namespace

@@ -1,0 +1,103 @@
+// Golden images: the SHA-256 of every bundled scene's pixels in both precisions, at one and
+// four samples per pixel, pinned in tests/golden/hashes.txt. Any change to a byte of any of
+// them fails here; a change made on purpose bumps kRenderVersion (rayfarm/render.h) and
+// rewrites the file with RAYFARM_UPDATE_GOLDEN=1.
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "rayfarm/sha256.h"
+#include "test_util.h"
+
+namespace rayfarm {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kHashes = fs::path(RAYFARM_SOURCE_DIR) / "tests/golden/hashes.txt";
+
+std::vector<fs::path> bundled_scenes() {
+  std::vector<fs::path> out;
+  for (auto& entry : fs::recursive_directory_iterator(fs::path(RAYFARM_SOURCE_DIR) / "scenes")) {
+    auto ext = entry.path().extension();
+    if (ext == ".txt" || ext == ".json") out.push_back(entry.path());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// "scene|variant" -> hash, for every case this build renders.
+std::map<std::string, std::string> current_hashes() {
+  std::map<std::string, std::string> out;
+  const std::string root = RAYFARM_SOURCE_DIR "/";
+  for (const fs::path& path : bundled_scenes()) {
+    const std::string text = read(path);
+    LoadedScene loaded = load_scene(text);
+    EXPECT_TRUE(loaded.scene) << path;
+    if (!loaded.scene) continue;
+    const std::string name = path.string().substr(root.size());
+    for (const char* precision : {"double", "float"})
+      for (int spp : {1, 4}) {
+        RenderOptions o;
+        Diagnostics diags;
+        apply_options(o, loaded.scene->render, diags);
+        EXPECT_FALSE(diags.has_errors()) << path;
+        o.width = 96;
+        o.height = 72;
+        o.spp = spp;
+        EXPECT_FALSE(apply_option(o, "precision", precision));
+        const Image image = test::render(*loaded.scene, o, 2);
+        const std::string bytes(image.rgb.begin(), image.rgb.end());
+        out[name + "|" + precision + ",spp=" + std::to_string(spp)] = sha256_hex(bytes);
+      }
+  }
+  return out;
+}
+
+TEST(Golden, BundledScenesRenderTheirPinnedBytes) {
+  const std::map<std::string, std::string> now = current_hashes();
+  if (std::getenv("RAYFARM_UPDATE_GOLDEN")) {
+    std::ofstream out(kHashes, std::ios::binary | std::ios::trunc);
+    out << "# render version " << kRenderVersion
+        << ": SHA-256 of the RGB bytes at 96x72 (tests/golden_test.cpp)\n";
+    for (const auto& [key, hash] : now) out << key << ' ' << hash << '\n';
+    GTEST_SKIP() << "rewrote " << kHashes;
+  }
+  std::ifstream in(kHashes);
+  ASSERT_TRUE(in) << "missing " << kHashes;
+  std::map<std::string, std::string> pinned;
+  std::string line;
+  int version = -1;
+  while (std::getline(in, line)) {
+    if (line.rfind("# render version ", 0) == 0) version = std::atoi(line.c_str() + 17);
+    if (line.empty() || line[0] == '#') continue;
+    const size_t space = line.rfind(' ');
+    pinned[line.substr(0, space)] = line.substr(space + 1);
+  }
+  EXPECT_EQ(version, kRenderVersion)
+      << "the pinned hashes are of another render version: regenerate them";
+  for (const auto& [key, hash] : pinned) {
+    auto it = now.find(key);
+    if (it == now.end()) {
+      ADD_FAILURE() << key << " is pinned but no longer rendered";
+      continue;
+    }
+    EXPECT_EQ(it->second, hash)
+        << key << " changed: if on purpose, bump kRenderVersion in rayfarm/render.h and run "
+                  "RAYFARM_UPDATE_GOLDEN=1 ./build/tests/rayfarm_tests --gtest_filter=Golden.*";
+  }
+  for (const auto& [key, hash] : now)
+    EXPECT_TRUE(pinned.count(key)) << key << " is rendered but not pinned: regenerate the file";
+}
+
+}  // namespace
+}  // namespace rayfarm
