@@ -1,17 +1,17 @@
 // The sphere hierarchy answers exactly as the plain loop does (object and t, to the bit), for
 // seeded random scenes and rays, the Origin rule, coincident and touching spheres, extreme
 // scales; and it is the same whatever the number of threads that built it.
-#include "bvh.h"
+#include "accel/bvh.h"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
 
-#include "prepared_scene.h"
+#include "render/prepared_scene.h"
 #include "random_scene.h"
 #include "rayfarm/load.h"
 #include "rayfarm/render.h"
-#include "tracer.h"
+#include "render/tracer.h"
 
 namespace rayfarm {
 namespace {

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "rayfarm/intersect.h"
-#include "tracer.h"
+#include "render/tracer.h"
 
 namespace rayfarm {
 namespace {

@@ -2,16 +2,16 @@
 // every kind of shading point (sphere outsides and insides, the floor, coincident and
 // touching spheres), for lights outside the spheres, among them, inside one and on one,
 // for segments grazing the spheres' silhouettes, at extreme scales, in both precisions.
-#include "light_buffer.h"
+#include "accel/light_buffer.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
-#include "prepared_scene.h"
+#include "render/prepared_scene.h"
 #include "rayfarm/render.h"
 #include "random_scene.h"
-#include "tracer.h"
+#include "render/tracer.h"
 
 namespace rayfarm {
 namespace {

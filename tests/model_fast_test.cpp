@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "model_fast.h"
+#include "format/model_fast.h"
 #include "rayfarm/model_parser.h"
 #include "test_util.h"
 

@@ -3,17 +3,17 @@
 // bins equal the plain loop's byte for byte for every camera placement (spheres in front of,
 // around and behind the eye, an eye looking either way along z), image shape, sampling and
 // distance cap, in both precisions.
-#include "screen_bins.h"
+#include "accel/screen_bins.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <map>
 
-#include "prepared_scene.h"
+#include "render/prepared_scene.h"
 #include "random_scene.h"
 #include "rayfarm/render.h"
-#include "tracer.h"
+#include "render/tracer.h"
 
 namespace rayfarm {
 namespace {

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "rayfarm/load.h"
-#include "sampler.h"
+#include "render/sampler.h"
 
 namespace rayfarm::bench {
 namespace {

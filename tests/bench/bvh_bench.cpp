@@ -5,9 +5,9 @@
 #include <vector>
 
 #include "bench_scenes.h"
-#include "bvh.h"
-#include "prepared_scene.h"
-#include "tracer.h"
+#include "accel/bvh.h"
+#include "render/prepared_scene.h"
+#include "render/tracer.h"
 
 namespace rayfarm {
 namespace {

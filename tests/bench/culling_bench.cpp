@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "bench_scenes.h"
-#include "light_buffer.h"
-#include "prepared_scene.h"
-#include "screen_bins.h"
-#include "tracer.h"
+#include "accel/light_buffer.h"
+#include "render/prepared_scene.h"
+#include "accel/screen_bins.h"
+#include "render/tracer.h"
 
 namespace rayfarm {
 namespace {

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "rayfarm/intersect.h"
-#include "sampler.h"
+#include "render/sampler.h"
 
 namespace rayfarm {
 namespace {

@@ -5,12 +5,12 @@
 #include <sstream>
 
 #include "bench_scenes.h"
-#include "prepared_scene.h"
+#include "render/prepared_scene.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/load.h"
 #include "rayfarm/model_parser.h"
 #include "rayfarm/render.h"
-#include "tracer.h"
+#include "render/tracer.h"
 
 namespace rayfarm {
 namespace {

@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "model_fast.h"
+#include "format/model_fast.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/json_scene.h"
 #include "rayfarm/lint.h"

@@ -1,5 +1,5 @@
 // Model-file lexer.
-#include "model_lexer.h"
+#include "format/model_lexer.h"
 
 namespace rayfarm {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "model_lexer.h"
+#include "format/model_lexer.h"
 #include "rayfarm/model_parser.h"
 
 namespace rayfarm {

@@ -10,7 +10,7 @@
 #include <optional>
 #include <vector>
 
-#include "prepared_scene.h"
+#include "render/prepared_scene.h"
 
 namespace rayfarm {
 

@@ -1,7 +1,7 @@
 // Scene text to a checked scene.
 #include "rayfarm/load.h"
 
-#include "model_fast.h"
+#include "format/model_fast.h"
 #include "rayfarm/json_scene.h"
 #include "rayfarm/model_parser.h"
 

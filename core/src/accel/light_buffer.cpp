@@ -1,7 +1,7 @@
 // Light buffer construction: each sphere's widened box is projected onto the faces of the
 // direction cube it can be seen through, its cells get an entry, and each cell's entries
 // are sorted by how near the light they begin.
-#include "light_buffer.h"
+#include "accel/light_buffer.h"
 
 #include <algorithm>
 #include <cmath>

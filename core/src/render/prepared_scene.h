@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "bvh.h"
-#include "light_buffer.h"
-#include "screen_bins.h"
+#include "accel/bvh.h"
+#include "accel/light_buffer.h"
+#include "accel/screen_bins.h"
 #include "rayfarm/intersect.h"
 #include "rayfarm/options.h"
 #include "rayfarm/scene.h"

@@ -1,7 +1,7 @@
 // Screen bin construction: each widened sphere's outline, seen from the eye, is bounded on
 // the screen plane by its tangents along each axis, turned into a padded pixel rectangle and
 // entered in every tile it reaches.
-#include "screen_bins.h"
+#include "accel/screen_bins.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 // depth-first order, so the tree is the same for any thread count. The binary tree is then
 // collapsed to four children per node (each node adopts the grandchildren of its largest
 // inner children) and flattened.
-#include "bvh.h"
+#include "accel/bvh.h"
 
 #include <array>
 #include <thread>

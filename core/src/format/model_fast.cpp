@@ -2,15 +2,15 @@
 // full parser (the same lexer) and applies the same schema table: value counts, ranges,
 // defaults, required attributes, names and material references. It gives up rather than
 // deciding anything the full parser would decide differently.
-#include "model_fast.h"
+#include "format/model_fast.h"
 
 #include <algorithm>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "model_lexer.h"
-#include "name_set.h"
+#include "format/model_lexer.h"
+#include "util/name_set.h"
 #include "rayfarm/model_parser.h"
 #include "rayfarm/schema.h"
 

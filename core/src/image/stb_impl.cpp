@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <memory>
 
-#include "stb_wrappers.h"
+#include "image/stb_wrappers.h"
 
 namespace {
 

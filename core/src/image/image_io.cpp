@@ -7,7 +7,7 @@
 #include <new>
 #include <stdexcept>
 
-#include "stb_wrappers.h"
+#include "image/stb_wrappers.h"
 
 namespace rayfarm {
 namespace {

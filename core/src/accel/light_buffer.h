@@ -17,7 +17,7 @@
 #include <span>
 #include <vector>
 
-#include "widened_sphere.h"
+#include "accel/widened_sphere.h"
 
 namespace rayfarm {
 

@@ -9,9 +9,9 @@
 #include <optional>
 #include <thread>
 
-#include "prepared_scene.h"
-#include "sampler.h"
-#include "tracer.h"
+#include "render/prepared_scene.h"
+#include "render/sampler.h"
+#include "render/tracer.h"
 
 namespace rayfarm {
 namespace {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "model_lexer.h"
+#include "format/model_lexer.h"
 #include "rayfarm/schema.h"
 
 namespace rayfarm {

@@ -1,6 +1,6 @@
 // Scene preparation: conversion to the tracer's precision and the analysis of which
 // pipeline parts the render needs.
-#include "prepared_scene.h"
+#include "render/prepared_scene.h"
 
 #include <algorithm>
 #include <exception>

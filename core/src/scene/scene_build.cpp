@@ -7,7 +7,7 @@
 #include <string_view>
 #include <vector>
 
-#include "name_set.h"
+#include "util/name_set.h"
 #include "rayfarm/scene.h"
 #include "rayfarm/schema.h"
 
