@@ -94,10 +94,31 @@ OptionSet OptionFlags::as_set() const {
   return set;
 }
 
+std::optional<std::string> FileResolver::read(const std::string& path, std::string& error) const {
+  const std::filesystem::path file = std::filesystem::path(path).is_absolute()
+                                         ? std::filesystem::path(path)
+                                         : base_ / path;
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) {
+    error = file.string() + " is a directory";
+    return std::nullopt;
+  }
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    error = file.string() + ": " + std::strerror(errno);
+    return std::nullopt;
+  }
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
 std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
-                                        bool print_warnings, LoadDetail detail) {
-  LoadedScene loaded = load_scene(text, detail);
-  Diagnostics shown;
+                                        bool print_warnings, LoadDetail detail, bool textures) {
+  // Textures are files beside the model file (beside the working directory for stdin).
+  const FileResolver files(path == "-" ? std::filesystem::path(".")
+                                       : std::filesystem::path(path).parent_path());
+  LoadedScene loaded = load_scene(text, detail, textures ? &files : nullptr);
   for (const Diagnostic& d : loaded.diags.items())
     if (d.severity == Severity::error || print_warnings)
       std::cerr << format_diagnostic(d, display_name(path), text);

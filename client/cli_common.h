@@ -1,6 +1,7 @@
 // Shared pieces of the command line: exit codes, file I/O, render-option flags.
 #pragma once
 
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -28,9 +29,22 @@ struct OptionFlags {
   OptionSet as_set() const;
 };
 
-// Loads and checks a scene file, printing diagnostics. nullopt when it has errors.
+// Texture files of a local render: paths as the scene writes them, relative to the model
+// file's folder (the user's own files: `..` and absolute paths are theirs to use).
+class FileResolver final : public ResourceResolver {
+ public:
+  explicit FileResolver(std::filesystem::path base) : base_(std::move(base)) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override;
+
+ private:
+  std::filesystem::path base_;
+};
+
+// Loads and checks a scene file, printing diagnostics. nullopt when it has errors. With
+// `textures`, the scene's texture files are read too (their problems are errors).
 std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
-                                        bool print_warnings, LoadDetail detail = LoadDetail::scene);
+                                        bool print_warnings, LoadDetail detail = LoadDetail::scene,
+                                        bool textures = true);
 
 // The scene's own options, then the command line's; errors printed. nullopt on error.
 std::optional<RenderOptions> resolve_options(const Scene& scene, const OptionFlags& flags);

@@ -37,7 +37,7 @@ Runner add_check(CLI::App& app) {
         const Scene& s = *loaded->scene;
         std::cout << display_name(path) << ": ok: " << s.cameras.size() << " camera(s), "
                   << s.materials.size() << " material(s), " << s.lights.size() << " light(s), "
-                  << s.spheres.size() << " sphere(s), " << s.planes.size() << " plane(s)"
+                  << s.objects.size() << " object(s)"
                   << (lints.items().empty() ? "" : ", " + std::to_string(lints.items().size()) +
                                                        " warning(s)")
                   << "\n";

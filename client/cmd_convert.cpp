@@ -27,7 +27,7 @@ Runner add_convert(CLI::App& app) {
   return [args] {
     auto text = read_input(args->scene);
     if (!text) return int(kInputError);
-    auto loaded = load_checked(args->scene, *text, false, LoadDetail::full);
+    auto loaded = load_checked(args->scene, *text, false, LoadDetail::full, false);
     if (!loaded) return int(kInputError);
     std::string out;
     if (args->to == "json") {

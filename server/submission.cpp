@@ -188,7 +188,7 @@ ApiError Service::check_limits(const Scene& scene, const RenderOptions& o, int w
   if (o.max_depth > s.max_depth)
     return limit_error("max_depth", "max_depth " + std::to_string(o.max_depth) +
                                         " is over the limit of " + std::to_string(s.max_depth));
-  size_t objects = scene.spheres.size() + scene.planes.size();
+  size_t objects = scene.objects.size();
   if (objects > static_cast<size_t>(s.max_objects))
     return limit_error("max_objects", "the scene has " + std::to_string(objects) +
                                           " objects; the limit is " + std::to_string(s.max_objects));

@@ -117,7 +117,7 @@ void expect_same_grazing_answers(double extent) {
   const Tracer<T> loop(p.loop), bvh(p.bvh);
   int hits = 0;
   for (int i = 0; i < 20000; ++i) {
-    const Sphere& sp = scene.spheres[rng.below(300)];
+    const Sphere& sp = test::sphere_at(scene, rng.below(300));
     const int axis = rng.below(3);
     glm::dvec3 normal(0);
     normal[axis] = rng.chance(0.5) ? 1 : -1;
@@ -202,8 +202,9 @@ TEST(Bvh, TouchingSpheresAgreeWithTheLoopAtTheContactPoint) {
 // The spheres' bounding boxes, as scene preparation gives them to the builder.
 std::vector<BvhBox> boxes_of(const Scene& scene) {
   std::vector<BvhBox> boxes;
-  for (const Sphere& sp : scene.spheres)
-    boxes.push_back({sp.center - sp.radius, sp.center + sp.radius});
+  for (const Object& o : scene.objects)
+    if (const Sphere* sp = o.as<Sphere>())
+      boxes.push_back({sp->center - sp->radius, sp->center + sp->radius});
   return boxes;
 }
 

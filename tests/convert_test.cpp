@@ -265,7 +265,7 @@ TEST(Convert, HandlesFiftyThousandMaterialsInLinearTime) {
   Scene s = build(back);
   ASSERT_EQ(s.materials.size(), static_cast<size_t>(n));
   EXPECT_EQ(s.materials[n - 1].name, "m" + std::to_string(n - 1));
-  EXPECT_EQ(s.spheres[n - 1].material, n - 1);
+  EXPECT_EQ(test::nth<Sphere>(s, n - 1).material, n - 1);
 }
 
 // --- POV-Ray --------------------------------------------------------------------------------

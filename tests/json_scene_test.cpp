@@ -101,7 +101,7 @@ TEST(JsonScene, GivesTheSameSceneAsTheModelFile) {
   Scene from_json = scene_of(kLectureJson);
   Scene from_model = scene_of(kLectureModel);
   expect_same_scene(from_json, from_model);
-  EXPECT_EQ(from_json.spheres.size(), 3u);
+  EXPECT_EQ(from_json.count<Sphere>(), 3u);
   EXPECT_EQ(from_json.materials[2].shininess, 8.0);
 }
 
@@ -116,7 +116,7 @@ TEST(JsonScene, SkipsAByteOrderMark) {
   std::string bom = "\xEF\xBB\xBF";
   EXPECT_EQ(detect_format(bom + " {}"), SceneFormat::json);
   Scene s = scene_of(bom + scene_with_sphere(kGoodSphere));
-  EXPECT_EQ(s.spheres.size(), 1u);
+  EXPECT_EQ(s.count<Sphere>(), 1u);
   Diagnostic d = single_error(bom + "{,}");
   EXPECT_EQ(d.code, "json-syntax");
   EXPECT_EQ(d.where.line, 1);
@@ -145,7 +145,7 @@ TEST(JsonScene, KeepsTheOrderOfCamerasSoTheFirstIsTheDefault) {
 
 TEST(JsonScene, AcceptsOneNumberForAColourOrARadius) {
   Scene s = scene_of(scene_with_sphere(R"("material": "m", "center": [0, 0, -5], "radius": [2])"));
-  EXPECT_EQ(s.spheres[0].radius, 2.0);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).radius, 2.0);
   EXPECT_EQ(s.materials[0].diffuse, glm::dvec3(1, 1, 1));
 }
 
@@ -185,7 +185,7 @@ TEST(JsonScene, ListsTheKeysAnEntityAccepts) {
   Diagnostic d =
       single_error(scene_with_sphere(kGoodSphere, R"(, "lights": [{"position": [0, 0, 0]}])"));
   EXPECT_TRUE(is_diag(d, "unknown-key", "/lights/0/position",
-                      "(expected one of: location, emissivity, name)"));
+                      "(expected one of: location, emissivity, name, type)"));
 }
 
 TEST(JsonScene, ReportsAnUnknownTopLevelKey) {
@@ -342,8 +342,9 @@ TEST(JsonScene, ReportsAnUnknownObjectTypeWithASuggestion) {
       single_error(R"({"camera": {"pixeldim": [8, 6], "worlddim": [8, 6], "viewpoint": [4, 3, 5]},
       "objects": [{"type": "sphre", "material": "m", "center": [0, 0, -5], "radius": 1}]})");
   EXPECT_TRUE(is_diag(d, "unknown-entity", "/objects/0/type",
-                      "unknown object type \"sphre\" (expected \"sphere\" or \"plane\"); did you "
-                      "mean \"sphere\"?"));
+                      "unknown object type \"sphre\" (expected \"sphere\", \"plane\", \"fplane\", "
+                      "\"tiled_plane\", \"texplane\", \"triangle\", \"tri\" or \"revsurf\"); "
+                      "did you mean \"sphere\"?"));
 }
 
 TEST(JsonScene, ReportsAnObjectWithoutAType) {
@@ -375,7 +376,7 @@ TEST(JsonScene, ReportsNoCamera) {
 TEST(JsonScene, ReportsEveryIndependentError) {
   LoadedScene loaded =
       load_scene(R"({"camera": {"pixeldim": [8, 6], "worlddim": [8, 6], "viewpoint": [4, 3, 5]},
-      "materials": {"m": {"shininess": 0}},
+      "materials": {"m": {"shininess": -1}},
       "objects": [{"type": "sphere", "material": "m", "center": [0, 0], "radius": 1},
                   {"type": "sphere", "material": "x", "center": [0, 0, 0], "radius": 1}]})");
   std::vector<Diagnostic> errors = errors_of(loaded.diags);

@@ -39,12 +39,17 @@ Pair<T> prepare_both(const Scene& scene) {
 // The four kinds of light position; the random scenes fill [-extent, extent]^3.
 void add_lights(Scene& s, double extent) {
   s.lights.clear();
-  s.lights.push_back({"outside", {}, {0, 3 * extent, 0.5 * extent}, {1, 1, 1}});
-  s.lights.push_back({"among", {}, {0.1 * extent, 0.2 * extent, -0.3 * extent}, {1, 1, 1}});
-  const Sphere& a = s.spheres[0];
-  s.lights.push_back({"inside", {}, a.center + glm::dvec3(0.3 * a.radius, 0, 0), {1, 1, 1}});
-  const Sphere& b = s.spheres[1];
-  s.lights.push_back({"on", {}, b.center + glm::dvec3(0, b.radius, 0), {1, 1, 1}});
+  auto add = [&](const char* name, glm::dvec3 at) {
+    Light& l = s.lights.emplace_back();
+    l.name = name;
+    l.location = at;
+  };
+  add("outside", {0, 3 * extent, 0.5 * extent});
+  add("among", {0.1 * extent, 0.2 * extent, -0.3 * extent});
+  const Sphere& a = test::sphere_at(s, 0);
+  add("inside", a.center + glm::dvec3(0.3 * a.radius, 0, 0));
+  const Sphere& b = test::sphere_at(s, 1);
+  add("on", b.center + glm::dvec3(0, b.radius, 0));
 }
 
 std::string light_name(const Scene& s, std::size_t i) { return s.lights[i].name; }
@@ -97,12 +102,14 @@ Counts expect_same_shadows(const Scene& scene, Rng& rng, double extent, int rays
 }
 
 Scene scaled(Scene s, double k) {
-  for (Sphere& sp : s.spheres) {
-    sp.center *= k;
-    sp.radius *= k;
+  for (Object& o : s.objects) {
+    if (Sphere* sp = std::get_if<Sphere>(&o.shape)) {
+      sp->center *= k;
+      sp->radius *= k;
+    }
+    if (Plane* pl = std::get_if<Plane>(&o.shape)) pl->point *= k;
   }
   for (Light& l : s.lights) l.location *= k;
-  for (Plane& pl : s.planes) pl.point *= k;
   return s;
 }
 
@@ -139,12 +146,16 @@ void expect_grazing_segments_agree(Rng& rng) {
   Scene scene = test::base_scene();
   for (int i = 0; i < 64; ++i) test::add_sphere(scene, rng.point(4), std::exp(rng.in(-5, 0)));
   const glm::dvec3 light(0.5, 9, 0.25);
-  scene.lights = {{"l", {}, light, {1, 1, 1}}};
+  scene.lights.assign(1, Light{});
+  scene.lights[0].name = "l";
+  scene.lights[0].location = light;
   const Pair<T> p = prepare_both<T>(scene);
   ASSERT_FALSE(p.fast.light_buffers.empty());
   const Tracer<T> loop(p.loop), fast(p.fast);
   int blocked = 0, rays = 0;
-  for (const Sphere& s : scene.spheres) {
+  for (const Object& o : scene.objects) {
+    if (!o.as<Sphere>()) continue;
+    const Sphere& s = *o.as<Sphere>();
     const glm::dvec3 axis = glm::normalize(s.center - light);
     const double dist = glm::length(s.center - light);
     for (int k = 0; k < 40; ++k) {
@@ -224,7 +235,12 @@ TEST(LightBuffer, ManyLightsShareAMemoryBudgetAndTheRestKeepTheHierarchy) {
   Scene scene = random_scene(rng, 300, 4);
   scene.lights.clear();
   for (int i = 0; i < 40; ++i)
-    scene.lights.push_back({"l" + std::to_string(i), {}, rng.point(12), {0.05, 0.05, 0.05}});
+  {
+    Light& l = scene.lights.emplace_back();
+    l.name = "l" + std::to_string(i);
+    l.location = rng.point(12);
+    l.emissivity = glm::dvec3(0.05);
+  }
   const PreparedScene<double> p = prepare_scene<double>(scene, {}, 0);
   std::size_t built = 0, entries = 0;
   for (const LightBuffer& lb : p.light_buffers) {
@@ -234,7 +250,7 @@ TEST(LightBuffer, ManyLightsShareAMemoryBudgetAndTheRestKeepTheHierarchy) {
   EXPECT_GT(built, 0u);
   EXPECT_LT(built, scene.lights.size());
   // The budget (64 entries a sphere), overshot by one buffer (48 a sphere at most).
-  EXPECT_LE(entries, (64 + 48) * scene.spheres.size());
+  EXPECT_LE(entries, (64 + 48) * scene.count<Sphere>());
   RenderOptions o;
   o.width = 40;
   o.height = 30;

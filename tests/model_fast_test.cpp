@@ -71,7 +71,7 @@ TEST(ModelFast, ReadsAFileInTwoPartsExactlyAsInOne) {
   const auto halves = load_model_fast(text, 0);
   ASSERT_TRUE(halves.has_value());
   EXPECT_TRUE(*halves == *full);
-  EXPECT_EQ(halves->spheres.back().where.line, full->spheres.back().where.line);
+  EXPECT_EQ(halves->objects.back().where.line, full->objects.back().where.line);
   // A name repeated across the cut is an error, as in one piece.
   const std::string twice = head + "sphere s3 { center 0 1 -5 radius 1 material late }\n" + tail;
   EXPECT_FALSE(full_load(twice).has_value());
@@ -100,10 +100,10 @@ TEST(ModelFast, AppliesDefaultsOneNumberColoursAndLateMaterials) {
   EXPECT_TRUE(*fast == *full_load(text));
   EXPECT_EQ(fast->materials[0].ambient, glm::dvec3(2, 2, 2));
   EXPECT_EQ(fast->materials[0].diffuse, glm::dvec3(0, 0, 0));
-  EXPECT_EQ(fast->materials[0].shininess, 32);
+  EXPECT_FALSE(fast->materials[0].shininess.has_value());  // the profile's default
   EXPECT_EQ(fast->lights[0].emissivity, glm::dvec3(1, 1, 1));
-  EXPECT_EQ(fast->spheres[0].where.line, 3);
-  EXPECT_EQ(fast->planes[0].material, 0);
+  EXPECT_EQ(test::nth<Sphere>(*fast, 0).where.line, 3);
+  EXPECT_EQ(test::nth<Plane>(*fast, 0).material, 0);
 }
 
 TEST(ModelFast, DeclinesEveryError) {

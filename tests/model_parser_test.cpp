@@ -2,6 +2,7 @@
 // message, no cascades, the lexical corner cases, and hostile input.
 #include "rayfarm/model_parser.h"
 
+#include "test_util.h"
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -120,10 +121,11 @@ TEST(ModelParser, ReportsAnUnknownEntityAndSuggestsTheNearestKeyword) {
 }
 
 TEST(ModelParser, ReportsAnUnknownEntityWithoutAHintWhenNothingIsClose) {
-  Diagnostic d = single_error("triangle t { a 1 2 3 }\n");
+  Diagnostic d = single_error("cylinder t { a 1 2 3 }\n");
   EXPECT_TRUE(is_diag(d, "unknown-entity", 3, 1,
-                      "unknown entity 'triangle'; expected camera, material, light, sphere or "
-                      "plane"));
+                      "unknown entity 'cylinder'; expected one of: camera, material, texture, "
+                      "light, spotlight, projector, sphere, plane, fplane, tiled_plane, "
+                      "texplane, triangle, tri, revsurf"));
   EXPECT_FALSE(has_text(d.message, "did you mean"));
 }
 
@@ -264,7 +266,7 @@ TEST(ModelParser, ReportsEveryKindOfNonNumberAtItsToken) {
       {"-", "expected a decimal number"},
       {"--1", "expected a decimal number"},
       {"abc", "expected a decimal number"},
-      {"1,5", "unexpected characters after the number"},
+      {"1;5", "unexpected characters after the number"},
   };
   for (const BadNumber& c : cases) {
     SCOPED_TRACE(c.token);
@@ -341,7 +343,7 @@ TEST(ModelParser, ReportsOutOfRangeValuesAtTheValue) {
       {"sphere s { material m center 0 0 -5 radius -1 }", "-1", "'radius' must be > 0, got -1"},
       {"material k { ambient 1 -0.5 1 }", "-0.5", "'ambient' values must be >= 0, got -0.5"},
       {"material k { diffuse -1 }", "-1", "'diffuse' values must be >= 0, got -1"},
-      {"material k { shininess 0 }", "0", "'shininess' must be > 0, got 0"},
+      {"material k { shininess -1 }", "-1", "'shininess' must be >= 0, got -1"},
       {"light l { location 0 0 0 emissivity 1 1 -2 }", "-2",
        "'emissivity' values must be >= 0, got -2"},
   };
@@ -381,8 +383,8 @@ TEST(ModelParser, ReportsAZeroNormalAtTheAttribute) {
 
 TEST(ModelParser, AcceptsANormalThatIsNotUnitLength) {
   Scene s = scene_of(with_head("plane p { material m normal 0 -0 7 point 0 0 0 }\n"));
-  ASSERT_EQ(s.planes.size(), 1u);
-  EXPECT_EQ(s.planes[0].normal.z, 7.0);
+  ASSERT_EQ(s.count<Plane>(), 1u);
+  EXPECT_EQ(test::shape<Plane>(s, 0).normal.z, 7.0);
 }
 
 TEST(ModelParser, AcceptsAmbientAboveOne) {
@@ -451,10 +453,10 @@ TEST(ModelParser, LetsASphereAndAPlaneShareAName) {
       scene_of(with_head("sphere x { material m center 0 0 -5 radius 1 }\n"
                          "plane x { material m normal 0 1 0 point 0 0 0 }\n"
                          "light x { location 1 1 1 }\n"));
-  ASSERT_EQ(s.spheres.size(), 1u);
-  ASSERT_EQ(s.planes.size(), 1u);
-  EXPECT_EQ(s.spheres[0].name, "x");
-  EXPECT_EQ(s.planes[0].name, "x");
+  ASSERT_EQ(s.count<Sphere>(), 1u);
+  ASSERT_EQ(s.count<Plane>(), 1u);
+  EXPECT_EQ(test::nth<Sphere>(s, 0).name, "x");
+  EXPECT_EQ(test::nth<Plane>(s, 0).name, "x");
   EXPECT_EQ(s.lights[0].name, "x");
 }
 
@@ -464,7 +466,7 @@ TEST(ModelParser, AllowsSeveralUnnamedLightsAndObjects) {
                          "sphere { material m center 0 0 -5 radius 1 }\n"
                          "sphere { material m center 0 0 -9 radius 1 }\n"));
   EXPECT_EQ(s.lights.size(), 2u);
-  EXPECT_EQ(s.spheres.size(), 2u);
+  EXPECT_EQ(s.count<Sphere>(), 2u);
 }
 
 TEST(ModelParser, ReportsAnUndefinedMaterialAtItsNameAndListsTheDefinedOnes) {
@@ -514,8 +516,8 @@ TEST(ModelParser, AcceptsNamesWithDigitsDotsAndDashes) {
   Scene s =
       scene_of(with_head("material _Chrome.v2-b { specular 1 }\n"
                          "sphere s.1 { material _Chrome.v2-b center 0 0 -5 radius 1 }\n"));
-  EXPECT_EQ(s.spheres[0].name, "s.1");
-  EXPECT_EQ(s.materials[s.spheres[0].material].name, "_Chrome.v2-b");
+  EXPECT_EQ(test::nth<Sphere>(s, 0).name, "s.1");
+  EXPECT_EQ(s.materials[test::nth<Sphere>(s, 0).material].name, "_Chrome.v2-b");
 }
 
 // --- Braces ---------------------------------------------------------------------------------
@@ -630,27 +632,27 @@ TEST(ModelParser, ReadsTheLectureScene) {
   EXPECT_EQ(s.cameras[0].viewpoint.z, 5.0);
   ASSERT_EQ(s.materials.size(), 2u);
   EXPECT_EQ(s.materials[0].specular.y, 0.9);
-  EXPECT_EQ(s.materials[0].shininess, 32.0);  // the default
+  EXPECT_FALSE(s.materials[0].shininess.has_value());  // the profile decides  // the default
   EXPECT_EQ(s.materials[1].specular.x, 0.0);  // the default
   ASSERT_EQ(s.lights.size(), 1u);
   EXPECT_EQ(s.lights[0].location.x, 2.56);
-  ASSERT_EQ(s.spheres.size(), 1u);
-  EXPECT_EQ(s.spheres[0].radius, 0.9);
-  EXPECT_EQ(s.spheres[0].center.y, 0.75);
-  ASSERT_EQ(s.planes.size(), 1u);
-  EXPECT_EQ(s.planes[0].point.y, -0.2);
-  EXPECT_EQ(s.materials[s.planes[0].material].name, "floor");
+  ASSERT_EQ(s.count<Sphere>(), 1u);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).radius, 0.9);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).center.y, 0.75);
+  ASSERT_EQ(s.count<Plane>(), 1u);
+  EXPECT_EQ(test::shape<Plane>(s, 0).point.y, -0.2);
+  EXPECT_EQ(s.materials[test::nth<Plane>(s, 0).material].name, "floor");
   EXPECT_EQ(s.cameras[0].where.line, 2);
-  EXPECT_EQ(s.spheres[0].where.line, 21);
+  EXPECT_EQ(test::nth<Sphere>(s, 0).where.line, 21);
 }
 
 TEST(ModelParser, SplitsBracesGluedToWords) {
   Scene s = scene_of(
       "camera c{pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5}material m{diffuse 1}"
       "sphere s{material m center 0 0 -5 radius 1}");
-  ASSERT_EQ(s.spheres.size(), 1u);
-  EXPECT_EQ(s.spheres[0].radius, 1.0);
-  EXPECT_EQ(s.spheres[0].center.z, -5.0);
+  ASSERT_EQ(s.count<Sphere>(), 1u);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).radius, 1.0);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).center.z, -5.0);
 }
 
 TEST(ModelParser, SkipsHashAndSlashCommentsEvenGluedToATokenOrHoldingBraces) {
@@ -660,19 +662,19 @@ TEST(ModelParser, SkipsHashAndSlashCommentsEvenGluedToATokenOrHoldingBraces) {
       "{ pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
       "material m { diffuse 1#glued\n}\n"
       "sphere s { material m//glued\n center 0 0 -5// glued\n radius 2# }\n}\n");
-  ASSERT_EQ(s.spheres.size(), 1u);
-  EXPECT_EQ(s.spheres[0].radius, 2.0);
-  EXPECT_EQ(s.spheres[0].center.z, -5.0);
+  ASSERT_EQ(s.count<Sphere>(), 1u);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).radius, 2.0);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).center.z, -5.0);
 }
 
 TEST(ModelParser, ReadsEveryNumberForm) {
   Scene s =
       scene_of(with_head("sphere s { material m center .5 5. +1 radius 1E0 }\n"
                          "light l { location 1e-3 -2.5 1e+2 }\n"));
-  EXPECT_EQ(s.spheres[0].center.x, 0.5);
-  EXPECT_EQ(s.spheres[0].center.y, 5.0);
-  EXPECT_EQ(s.spheres[0].center.z, 1.0);
-  EXPECT_EQ(s.spheres[0].radius, 1.0);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).center.x, 0.5);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).center.y, 5.0);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).center.z, 1.0);
+  EXPECT_EQ(test::shape<Sphere>(s, 0).radius, 1.0);
   EXPECT_EQ(s.lights[0].location.x, 0.001);
   EXPECT_EQ(s.lights[0].location.y, -2.5);
   EXPECT_EQ(s.lights[0].location.z, 100.0);
@@ -695,7 +697,7 @@ TEST(ModelParser, AppliesTheDefaults) {
   EXPECT_EQ(s.materials[1].ambient, glm::dvec3(0));
   EXPECT_EQ(s.materials[1].diffuse, glm::dvec3(0));
   EXPECT_EQ(s.materials[1].specular, glm::dvec3(0));
-  EXPECT_EQ(s.materials[1].shininess, 32.0);
+  EXPECT_FALSE(s.materials[1].shininess.has_value());  // the profile decides
   EXPECT_EQ(s.lights[0].emissivity, glm::dvec3(1));
 }
 
@@ -705,9 +707,9 @@ TEST(ModelParser, AcceptsAMaterialUsedBeforeItIsDefined) {
       "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
       "material early { diffuse 1 }\n"
       "material late { diffuse 0.5 }\n");
-  ASSERT_EQ(s.spheres.size(), 1u);
-  EXPECT_EQ(s.materials[s.spheres[0].material].name, "late");
-  EXPECT_EQ(s.materials[s.spheres[0].material].diffuse.x, 0.5);
+  ASSERT_EQ(s.count<Sphere>(), 1u);
+  EXPECT_EQ(s.materials[test::nth<Sphere>(s, 0).material].name, "late");
+  EXPECT_EQ(s.materials[test::nth<Sphere>(s, 0).material].diffuse.x, 0.5);
 }
 
 TEST(ModelParser, ReadsCrlfLineEndingsAndReportsTheirPositions) {
@@ -724,14 +726,14 @@ TEST(ModelParser, ReadsCrlfLineEndingsAndReportsTheirPositions) {
 TEST(ModelParser, SkipsAByteOrderMarkAndCountsColumnsAfterIt) {
   std::string bom = "\xEF\xBB\xBF";
   Scene s = scene_of(bom + with_head("sphere s { material m center 0 0 -5 radius 1 }\n"));
-  EXPECT_EQ(s.spheres.size(), 1u);
+  EXPECT_EQ(s.count<Sphere>(), 1u);
   Diagnostic d = single_error_of_file(bom + "camra c { }\n");
   EXPECT_TRUE(is_diag(d, "unknown-entity", 1, 1, "unknown entity 'camra'"));
 }
 
 TEST(ModelParser, SeparatesTokensWithTabsAndCountsATabAsOneColumn) {
   Scene s = scene_of(with_head("sphere\ts\t{\tmaterial\tm\tcenter\t0\t0\t-5\tradius\t1\t}\n"));
-  EXPECT_EQ(s.spheres.size(), 1u);
+  EXPECT_EQ(s.count<Sphere>(), 1u);
   Diagnostic d = single_error("\t\tsphere s { material m center 0 0 -5 radius 0 }\n");
   EXPECT_TRUE(is_diag(d, "out-of-range", 3, 46, "'radius' must be > 0"));
 }

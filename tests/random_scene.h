@@ -42,17 +42,22 @@ inline Scene base_scene() {
   m.name = "m";
   m.diffuse = glm::dvec3(0.5);
   s.materials.push_back(m);
-  s.lights.push_back({"l", {}, {0, 10, 0}, {1, 1, 1}});
+  Light light;
+  light.name = "l";
+  light.location = {0, 10, 0};
+  s.lights.push_back(light);
   return s;
 }
 
 inline void add_sphere(Scene& s, glm::dvec3 centre, double radius) {
-  Sphere sp;
-  sp.name = "s" + std::to_string(s.spheres.size());
-  sp.center = centre;
-  sp.radius = radius;
-  s.spheres.push_back(sp);
+  Object& o = s.objects.emplace_back();
+  o.name = "s" + std::to_string(s.objects.size() - 1);
+  o.kind = EntityKind::sphere;
+  o.shape = Sphere{centre, radius};
 }
+
+// The i-th object, a sphere (random scenes have the spheres first).
+inline const Sphere& sphere_at(const Scene& s, size_t i) { return *s.objects[i].as<Sphere>(); }
 
 // `count` spheres in a cube of side 2 * extent, radii over three decades, with a share of
 // exact duplicates and of spheres touching an earlier one.
@@ -60,20 +65,19 @@ inline Scene random_scene(Rng& rng, int count, double extent) {
   Scene s = base_scene();
   for (int i = 0; i < count; ++i) {
     if (i > 0 && rng.chance(0.1)) {  // coincident with an earlier sphere
-      const Sphere& twin = s.spheres[rng.below(i)];
+      const Sphere& twin = sphere_at(s, rng.below(i));
       add_sphere(s, twin.center, twin.radius);
     } else if (i > 0 && rng.chance(0.1)) {  // touching an earlier sphere from outside
-      const Sphere& other = s.spheres[rng.below(i)];
+      const Sphere& other = sphere_at(s, rng.below(i));
       double r = extent * std::exp(rng.in(std::log(1e-3), std::log(0.1)));
       add_sphere(s, other.center + (other.radius + r) * rng.direction(), r);
     } else {
       add_sphere(s, rng.point(extent), extent * std::exp(rng.in(std::log(1e-3), std::log(0.1))));
     }
   }
-  Plane floor;
-  floor.normal = {0, 1, 0};
-  floor.point = {0, -extent, 0};
-  s.planes.push_back(floor);
+  Object& floor = s.objects.emplace_back();
+  floor.kind = EntityKind::plane;
+  floor.shape = Plane{{0, 1, 0}, {0, -extent, 0}};
   return s;
 }
 

@@ -7,7 +7,9 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "rayfarm/load.h"
 #include "rayfarm/render.h"
@@ -44,6 +46,29 @@ inline std::array<int, 3> pixel(const Image& image, int x, int r) {
   return {p[0], p[1], p[2]};
 }
 
+// The i-th object of shape S, in file order, and its shape.
+template <class S>
+const Object& nth(const Scene& scene, size_t i) {
+  for (const Object& o : scene.objects)
+    if (o.as<S>() && i-- == 0) return o;
+  throw std::out_of_range("no such object");
+}
+template <class S>
+const S& shape(const Scene& scene, size_t i) {
+  return *nth<S>(scene, i).template as<S>();
+}
+
+// Adds an object of the given shape (tests that build scenes by hand).
+template <class S>
+Object& add(Scene& scene, const S& shape, int material = 0, std::string name = {}) {
+  Object& o = scene.objects.emplace_back();
+  o.name = std::move(name);
+  o.kind = std::is_same_v<S, Sphere> ? EntityKind::sphere : EntityKind::plane;
+  o.material = material;
+  o.shape = shape;
+  return o;
+}
+
 // The byte the spec's step 7 gives for a channel value.
 inline int byte_of(long double c) {
   if (c < 0) c = 0;
@@ -75,20 +100,19 @@ inline void expect_same_scene(const Scene& a, const Scene& b) {
     EXPECT_EQ(a.lights[i].name, b.lights[i].name);
     EXPECT_EQ(a.lights[i].location, b.lights[i].location);
     EXPECT_EQ(a.lights[i].emissivity, b.lights[i].emissivity);
+    EXPECT_EQ(a.lights[i].kind, b.lights[i].kind);
   }
-  ASSERT_EQ(a.spheres.size(), b.spheres.size());
-  for (size_t i = 0; i < a.spheres.size(); ++i) {
-    EXPECT_EQ(a.spheres[i].name, b.spheres[i].name);
-    EXPECT_EQ(a.spheres[i].center, b.spheres[i].center);
-    EXPECT_EQ(a.spheres[i].radius, b.spheres[i].radius);
-    EXPECT_EQ(a.spheres[i].material, b.spheres[i].material);
+  ASSERT_EQ(a.textures.size(), b.textures.size());
+  for (size_t i = 0; i < a.textures.size(); ++i) {
+    EXPECT_EQ(a.textures[i].name, b.textures[i].name);
+    EXPECT_EQ(a.textures[i].path, b.textures[i].path);
   }
-  ASSERT_EQ(a.planes.size(), b.planes.size());
-  for (size_t i = 0; i < a.planes.size(); ++i) {
-    EXPECT_EQ(a.planes[i].name, b.planes[i].name);
-    EXPECT_EQ(a.planes[i].normal, b.planes[i].normal);
-    EXPECT_EQ(a.planes[i].point, b.planes[i].point);
-    EXPECT_EQ(a.planes[i].material, b.planes[i].material);
+  ASSERT_EQ(a.objects.size(), b.objects.size());
+  for (size_t i = 0; i < a.objects.size(); ++i) {
+    EXPECT_EQ(a.objects[i].name, b.objects[i].name);
+    EXPECT_EQ(a.objects[i].kind, b.objects[i].kind);
+    EXPECT_EQ(a.objects[i].material, b.objects[i].material);
+    EXPECT_TRUE(a.objects[i].shape == b.objects[i].shape) << "object " << i;
   }
 }
 

@@ -43,23 +43,31 @@ Scene random_spheres(int count, std::uint64_t seed) {
                  material("green", {1, 4, 1}, {.15, .7, .2}, .3),
                  material("blue", {1, 1.5, 5}, {.1, .25, .8}, 0),
                  material("floor", {2, 2, 2}, {.5, .5, .5}, 0)};
-  s.lights.push_back({"key", {}, {-6, 30, 0}, {12, 12, 12}});
-  s.lights.push_back({"fill", {}, {14, 8, -4}, {4, 4, 4.5}});
-  Plane floor;
+  for (auto [name, at, e] : {std::tuple{"key", glm::dvec3(-6, 30, 0), glm::dvec3(12, 12, 12)},
+                             std::tuple{"fill", glm::dvec3(14, 8, -4), glm::dvec3(4, 4, 4.5)}}) {
+    Light& l = s.lights.emplace_back();
+    l.name = name;
+    l.location = at;
+    l.emissivity = e;
+  }
+  Object& floor = s.objects.emplace_back();
   floor.name = "ground";
+  floor.kind = EntityKind::plane;
   floor.material = 4;
-  s.planes.push_back(floor);
+  floor.shape = Plane{};
   Rng rng{seed * 0x9e3779b97f4a7c15ULL};
   for (int i = 0; i < count; ++i) {
     Sphere sp;
-    sp.name = "s" + std::to_string(i);
     // Uniform in the view frustum between 2 and 40 units behind the window.
     const double depth = rng.uniform(2, 40), k = (5 + depth) / 5;
     sp.center = {4 + (rng.uniform(0, 8) - 4) * k, 3 + (rng.uniform(0, 6) - 3) * k, -depth};
     sp.radius = rng.uniform(0.04, 0.14);
     if (sp.center.y < sp.radius) sp.center.y = sp.radius + rng.uniform(0, 1);
-    sp.material = static_cast<int>(rng.uniform(0, 4));
-    s.spheres.push_back(sp);
+    Object& o = s.objects.emplace_back();
+    o.name = "s" + std::to_string(i);
+    o.kind = EntityKind::sphere;
+    o.material = static_cast<int>(rng.uniform(0, 4));
+    o.shape = sp;
   }
   return s;
 }
@@ -77,11 +85,13 @@ std::string random_spheres_text(int count, std::uint64_t seed) {
       "light fill { location 14 8 -4 emissivity 4 4 4.5 }\n"
       "plane ground { material floor normal 0 1 0 point 0 0 0 }\n";
   char line[200];
-  for (const Sphere& sp : s.spheres) {
+  for (const Object& o : s.objects) {
+    const Sphere* sp = o.as<Sphere>();
+    if (!sp) continue;
     std::snprintf(line, sizeof line,
-                  "sphere %s { material %s center %.4f %.4f %.4f radius %.4f }\n", sp.name.c_str(),
-                  s.materials[sp.material].name.c_str(), sp.center.x, sp.center.y, sp.center.z,
-                  sp.radius);
+                  "sphere %s { material %s center %.4f %.4f %.4f radius %.4f }\n", o.name.c_str(),
+                  s.materials[o.material].name.c_str(), sp->center.x, sp->center.y, sp->center.z,
+                  sp->radius);
     out += line;
   }
   return out;

@@ -14,8 +14,9 @@ namespace {
 
 std::vector<BvhBox> boxes_of(const Scene& s) {
   std::vector<BvhBox> boxes;
-  for (const Sphere& sp : s.spheres)
-    boxes.push_back({sp.center - sp.radius, sp.center + sp.radius});
+  for (const Object& o : s.objects)
+    if (const Sphere* sp = o.as<Sphere>())
+    boxes.push_back({sp->center - sp->radius, sp->center + sp->radius});
   return boxes;
 }
 

@@ -16,7 +16,8 @@ namespace {
 
 std::vector<WidenedSphere> spheres_of(const Scene& s) {
   std::vector<WidenedSphere> out;
-  for (const Sphere& sp : s.spheres) out.push_back({sp.center, sp.radius});
+  for (const Object& o : s.objects)
+    if (const Sphere* sp = o.as<Sphere>()) out.push_back({sp->center, sp->radius});
   return out;
 }
 

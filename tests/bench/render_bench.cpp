@@ -85,7 +85,7 @@ void BM_LoadScene100k(benchmark::State& state) {
   const LoadDetail detail = state.range(0) ? LoadDetail::scene : LoadDetail::full;
   for (auto _ : state) {
     LoadedScene loaded = load_scene(text, detail);
-    benchmark::DoNotOptimize(loaded.scene->spheres.data());
+    benchmark::DoNotOptimize(loaded.scene->objects.data());
   }
   state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(text.size()));
 }
@@ -98,7 +98,7 @@ void BM_LoadGrid8000(benchmark::State& state) {
   const std::string text = s.str();
   for (auto _ : state) {
     LoadedScene loaded = load_scene(text);
-    benchmark::DoNotOptimize(loaded.scene->spheres.data());
+    benchmark::DoNotOptimize(loaded.scene->objects.data());
   }
   state.SetBytesProcessed(state.iterations() * static_cast<std::int64_t>(text.size()));
 }
@@ -124,7 +124,7 @@ void BM_BuildScene100k(benchmark::State& state) {
   for (auto _ : state) {
     Diagnostics diags;
     auto scene = build_scene(desc, diags);
-    benchmark::DoNotOptimize(scene->spheres.data());
+    benchmark::DoNotOptimize(scene->objects.data());
   }
 }
 BENCHMARK(BM_BuildScene100k)->Unit(benchmark::kMillisecond);

@@ -25,12 +25,11 @@ void check(bool ok, const char* what) {
 
 bool same_scene(const Scene& a, const Scene& b) {
   if (a.cameras.size() != b.cameras.size() || a.materials.size() != b.materials.size() ||
-      a.lights.size() != b.lights.size() || a.spheres.size() != b.spheres.size() ||
-      a.planes.size() != b.planes.size())
+      a.lights.size() != b.lights.size() || a.objects.size() != b.objects.size())
     return false;
-  for (size_t i = 0; i < a.spheres.size(); ++i)
-    if (a.spheres[i].center != b.spheres[i].center || a.spheres[i].radius != b.spheres[i].radius ||
-        a.spheres[i].material != b.spheres[i].material)
+  for (size_t i = 0; i < a.objects.size(); ++i)
+    if (!(a.objects[i].shape == b.objects[i].shape) ||
+        a.objects[i].material != b.objects[i].material)
       return false;
   for (size_t i = 0; i < a.materials.size(); ++i)
     if (a.materials[i].ambient != b.materials[i].ambient ||
@@ -82,7 +81,7 @@ int model_parser(const std::uint8_t* data, std::size_t size) {
     check(reloaded.scene.has_value(), "a written scene does not load");
     check(same_scene(*scene, *reloaded.scene), "round trip changed the scene");
   }
-  if (scene->spheres.size() + scene->planes.size() < 64) tiny_render(*scene);
+  if (scene->objects.size() < 64) tiny_render(*scene);
   return 0;
 }
 
@@ -95,7 +94,7 @@ int json_scene(const std::uint8_t* data, std::size_t size) {
   check(diags.has_errors() || scene.has_value(), "no errors but no scene");
   if (!scene) return 0;
   (void)write_pov(*scene, RenderOptions{});
-  if (scene->spheres.size() + scene->planes.size() < 64) tiny_render(*scene);
+  if (scene->objects.size() < 64) tiny_render(*scene);
   return 0;
 }
 

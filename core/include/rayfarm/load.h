@@ -25,6 +25,9 @@ struct LoadedScene {
   Diagnostics diags;
 };
 
-LoadedScene load_scene(std::string_view text, LoadDetail detail = LoadDetail::full);
+// With a resolver, the scene's textures are read and decoded too (their errors are scene
+// errors); without, they are left unresolved (a render of a scene with textures then fails).
+LoadedScene load_scene(std::string_view text, LoadDetail detail = LoadDetail::full,
+                       const ResourceResolver* resolver = nullptr);
 
 }  // namespace rayfarm

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -18,6 +19,8 @@ namespace rayfarm {
 enum class Highlight { phong, blinn };
 enum class Precision { f64, f32 };
 enum class ImageFormat { png, ppm };
+enum class Profile { lecture, cpsc102 };
+enum class Rounding { nearest, truncate };
 
 struct RenderOptions {
   int spp = 1;
@@ -36,6 +39,14 @@ struct RenderOptions {
   double target_error = 0;  // stop sampling once the error estimate (8-bit levels) is below; 0 = off
   double time_limit = 0;    // seconds; stop sampling when out of time; 0 = off
   bool specialize = true;   // run only the pipeline parts the scene needs (off: for testing)
+  Profile profile = Profile::lecture;
+  std::optional<Rounding> rounding;
+
+  Rounding effective_rounding() const {
+    return rounding ? *rounding : profile == Profile::cpsc102 ? Rounding::truncate : Rounding::nearest;
+  }
+  double effective_max_dist() const { return profile == Profile::cpsc102 && std::isinf(max_dist) ? 20.0 : max_dist; }
+  int effective_max_depth() const { return profile == Profile::cpsc102 ? 64 : max_depth; }
 
   bool operator==(const RenderOptions&) const = default;
 };

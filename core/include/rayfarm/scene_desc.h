@@ -150,12 +150,18 @@ class ValuePositions {
   std::unique_ptr<std::vector<std::string>> paths_;  // one per value, when any has a path
 };
 
-enum class EntityKind { camera, material, light, sphere, plane };
+// Every entity keyword of the format, in the order of the registry (core/src/scene/registry.cpp).
+enum class EntityKind {
+  camera, material, texture,                  // what objects and lights refer to
+  light, spotlight, projector,                // lights
+  sphere, plane, fplane, tiled_plane, texplane, triangle, tri, revsurf,  // objects
+};
+inline constexpr int kEntityKinds = 14;
 
 struct AttrDesc {
   std::string key;
   SmallVec<double, 3> numbers;  // numeric values as written (a one-number colour stays one)
-  std::string word;             // for name-valued attributes (sphere material)
+  std::string word;             // for name- and path-valued attributes (material, texname)
   Where where;                  // the attribute keyword
   ValuePositions value_where;  // read back as Where values
 };

@@ -28,29 +28,34 @@ void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& d
   if (has_view) view = glm::normalize(view);
 
   for (const Light& l : scene.lights)
-    for (const Sphere& s : scene.spheres)
-      if (glm::length(l.location - s.center) < s.radius)
-        diags.warning("light-inside-sphere",
-                      label("light", l.name) + " is inside " + label("sphere", s.name) +
-                          ": it lights only that sphere's inside",
-                      l.where);
+    for (const Object& o : scene.objects)
+      if (const Sphere* s = o.as<Sphere>(); s && glm::length(l.location - s->center) < s->radius)
+        if (scene.materials[o.material].transparency == 0)
+          diags.warning("light-inside-sphere",
+                        label("light", l.name) + " is inside " + label("sphere", o.name) +
+                            ": it lights only that sphere's inside",
+                        l.where);
 
-  for (const Sphere& s : scene.spheres) {
-    if (glm::length(eye - s.center) < s.radius)
+  for (const Object& o : scene.objects) {
+    const Sphere* s = o.as<Sphere>();
+    if (!s) continue;
+    if (glm::length(eye - s->center) < s->radius)
       diags.warning("eye-inside-sphere",
                     "the eye of " + label("camera", cam.name) + " is inside " +
-                        label("sphere", s.name),
-                    s.where);
-    else if (has_view && glm::dot(s.center - eye, view) < -s.radius)
+                        label("sphere", o.name),
+                    o.where);
+    else if (has_view && glm::dot(s->center - eye, view) < -s->radius)
       diags.warning("behind-eye",
-                    label("sphere", s.name) + " is behind the eye of " +
+                    label("sphere", o.name) + " is behind the eye of " +
                         label("camera", cam.name) + " and cannot be seen directly",
-                    s.where);
+                    o.where);
   }
 
   std::vector<bool> used(scene.materials.size(), false);
-  for (const Sphere& s : scene.spheres) used[s.material] = true;
-  for (const Plane& p : scene.planes) used[p.material] = true;
+  for (const Object& o : scene.objects) {
+    used[o.material] = true;
+    if (const TiledPlane* t = o.as<TiledPlane>()) used[t->alt_material] = true;
+  }
   for (size_t i = 0; i < scene.materials.size(); ++i)
     if (!used[i])
       diags.warning("unused-material",
@@ -62,7 +67,7 @@ void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& d
   bool any_ambient = false;
   for (size_t i = 0; i < scene.materials.size(); ++i)
     if (used[i]) any_ambient = any_ambient || !is_black(scene.materials[i].ambient);
-  bool objects = !scene.spheres.empty() || !scene.planes.empty();
+  bool objects = !scene.objects.empty();
   glm::dvec3 bg{options.background[0], options.background[1], options.background[2]};
   if (!objects && is_black(bg))
     diags.warning("black-image", "the scene has no objects: the image is all background", {});

@@ -136,8 +136,8 @@ Report run_report(const Scene& scene, const std::string& scene_name, const Rende
   mark_pareto(report.rows);
 
   if (settings.stability) {
-    if (scene.spheres.size() > 2000) {
-      report.stability_note = "left out: " + std::to_string(scene.spheres.size()) +
+    if (scene.count<Sphere>() > 2000) {
+      report.stability_note = "left out: " + std::to_string(scene.count<Sphere>()) +
                               " spheres is too many for the brute-force analysis";
       done += stability_steps;
     } else {

@@ -17,8 +17,10 @@ struct Closest {
 template <class T>
 Closest<T> closest_sphere(const Scene& scene, const Vec3<T>& o, const Vec3<T>& d, RootForm form) {
   Closest<T> best;
-  for (size_t i = 0; i < scene.spheres.size(); ++i) {
-    const Sphere& s = scene.spheres[i];
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const Sphere* sp = scene.objects[i].as<Sphere>();
+    if (!sp) continue;
+    const Sphere& s = *sp;
     Vec3<T> c(static_cast<T>(s.center.x), static_cast<T>(s.center.y), static_cast<T>(s.center.z));
     T r = static_cast<T>(s.radius);
     auto roots = form == RootForm::stable ? sphere_roots(o, d, c, r) : sphere_roots_naive(o, d, c, r);

@@ -195,18 +195,23 @@ class JsonSceneReader {
         if (expect(value.is_object(), value, "an object of named materials", path))
           for (auto& [name, mat] : value.items())
             read_entity(EntityKind::material, name, mat, child(path, name), scene);
+      } else if (key == "textures") {
+        if (expect(value.is_object(), value, "an object of named textures", path))
+          for (auto& [name, tex] : value.items())
+            read_entity(EntityKind::texture, name, tex, child(path, name), scene);
       } else if (key == "lights") {
         if (expect(value.is_array(), value, "an array of lights", path))
           for (size_t i = 0; i < value.size(); ++i)
-            read_entity(EntityKind::light, std::nullopt, value[i], child(path, i), scene);
+            read_typed(EntityRole::light, value[i], child(path, i), scene);
       } else if (key == "objects") {
         if (expect(value.is_array(), value, "an array of objects", path))
-          for (size_t i = 0; i < value.size(); ++i) read_object(value[i], child(path, i), scene);
+          for (size_t i = 0; i < value.size(); ++i)
+            read_typed(EntityRole::object, value[i], child(path, i), scene);
       } else if (key == "render") {
         read_render(value, path, scene);
       } else {
-        static constexpr std::string_view kKeys[] = {"camera", "cameras", "materials",
-                                                     "lights", "objects", "render"};
+        static constexpr std::string_view kKeys[] = {"camera",  "cameras", "materials", "textures",
+                                                     "lights",  "objects", "render"};
         unknown_key(key, kKeys, path);
       }
     }
@@ -234,26 +239,37 @@ class JsonSceneReader {
     return hint;
   }
 
-  void read_object(const Json& value, const std::string& path, SceneDesc& scene) {
+  // A light or an object: its "type" names the entity kind (a light's may be left out).
+  void read_typed(EntityRole role, const Json& value, const std::string& path, SceneDesc& scene) {
     if (!expect(value.is_object(), value, "an object", path)) return;
+    const auto kinds = keywords_of(role);
+    std::string expected;
+    for (size_t i = 0; i < kinds.size(); ++i)
+      expected += std::string(i == 0 ? "" : i + 1 == kinds.size() ? " or " : ", ") + "\"" +
+                  std::string(kinds[i]) + "\"";
     auto type = value.find("type");
     if (type == value.end()) {
-      diags_.error("missing-attribute", "object needs \"type\": \"sphere\" or \"plane\"", at(path));
+      if (role == EntityRole::light) {
+        read_entity(EntityKind::light, std::nullopt, value, path, scene);
+        return;
+      }
+      diags_.error("missing-attribute", "object needs \"type\": " + expected, at(path));
       return;
     }
-    if (!type->is_string() || (*type != "sphere" && *type != "plane")) {
+    const EntitySpec* spec = type->is_string() ? find_entity(type->get<std::string>()) : nullptr;
+    if (!spec || spec->role != role) {
       std::string got = type->is_string() ? type->get<std::string>() : type->dump();
-      static constexpr std::string_view kTypes[] = {"sphere", "plane"};
-      std::string hint = nearest_word(got, kTypes);
-      diags_.error("unknown-entity",
-                   "unknown object type \"" + printable(got) +
-                       "\" (expected \"sphere\" or \"plane\")" +
-                       (hint.empty() ? "" : "; did you mean \"" + hint + "\"?"),
+      std::string hint = nearest_word(got, kinds);
+      std::string why(type->is_string() ? unsupported_entity(got) : std::string_view());
+      diags_.error(why.empty() ? "unknown-entity" : "unsupported-entity",
+                   why.empty() ? "unknown " + std::string(role == EntityRole::light ? "light" : "object") +
+                                     " type \"" + printable(got) + "\" (expected " + expected + ")" +
+                                     (hint.empty() ? "" : "; did you mean \"" + hint + "\"?")
+                               : why,
                    at(child(path, "type")));
       return;
     }
-    EntityKind kind = *type == "sphere" ? EntityKind::sphere : EntityKind::plane;
-    read_entity(kind, std::nullopt, value, path, scene);
+    read_entity(spec->kind, std::nullopt, value, path, scene);
   }
 
   // `name` is set for entities named by their key (cameras, materials); nullopt when the
@@ -278,7 +294,7 @@ class JsonSceneReader {
     std::vector<std::string_view> keys;
     for (const AttrSpec& a : spec.attrs) keys.push_back(a.key);
     bool own_name = !name.has_value();
-    bool typed = kind == EntityKind::sphere || kind == EntityKind::plane;
+    const bool typed = spec.role == EntityRole::light || spec.role == EntityRole::object;
     if (own_name) keys.push_back("name");
     if (typed) keys.push_back("type");
 
@@ -313,11 +329,16 @@ class JsonSceneReader {
   }
 
   bool read_value(const AttrSpec& attr, const Json& v, const std::string& path, AttrDesc& a) {
-    if (attr.kind == ValueKind::material_ref) {
-      if (!expect(v.is_string(), v, "a material name", path)) return false;
+    if (is_word_kind(attr.kind)) {
+      const bool material = attr.kind == ValueKind::material_ref;
+      if (!expect(v.is_string(), v, material ? "a material name" : describe(attr), path))
+        return false;
       a.word = v.get<std::string>();
-      if (!is_valid_name(a.word)) {
-        diags_.error("bad-name", "invalid material name \"" + printable(a.word) + "\"", at(path));
+      if (material ? !is_valid_name(a.word) : !is_valid_path(a.word)) {
+        diags_.error("bad-name",
+                     std::string(material ? "invalid material name" : "invalid file name") +
+                         " \"" + printable(a.word) + "\"",
+                     at(path));
         return false;
       }
       a.value_where.push_back(at(path));
@@ -330,13 +351,13 @@ class JsonSceneReader {
       return true;
     }
     if (!v.is_array()) {
-      expect(false, v, describe(attr.kind), path);
+      expect(false, v, describe(attr), path);
       return false;
     }
     int n = static_cast<int>(std::min<size_t>(v.size(), 1000));
     if (n < lo || n > hi || (attr.kind == ValueKind::colour && n == 2)) {
       diags_.error("value-count",
-                   "\"" + a.key + "\" takes " + std::string(describe(attr.kind)) + ", got " +
+                   "\"" + a.key + "\" takes " + describe(attr) + ", got " +
                        std::to_string(v.size()) + (v.size() == 1 ? " value" : " values"),
                    at(path));
       return false;

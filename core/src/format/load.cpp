@@ -16,12 +16,13 @@ SceneFormat detect_format(std::string_view text) {
   return SceneFormat::model;
 }
 
-LoadedScene load_scene(std::string_view text, LoadDetail detail) {
+LoadedScene load_scene(std::string_view text, LoadDetail detail,
+                       const ResourceResolver* resolver) {
   LoadedScene out;
   const SceneFormat format = detect_format(text);
   if (detail == LoadDetail::scene && format == SceneFormat::model) {
     out.scene = load_model_fast(text);
-    if (out.scene) return out;
+    if (out.scene) return out;  // the fast path reads no kind that has textures
   }
   out.desc = format == SceneFormat::json ? parse_json_scene(text, out.diags)
                                          : parse_model(text, out.diags);
@@ -29,6 +30,8 @@ LoadedScene load_scene(std::string_view text, LoadDetail detail) {
   // the same pass; only input that did not parse at all (JSON syntax) stops here.
   if (!out.diags.has_errors() || !out.desc.entities.empty())
     out.scene = build_scene(out.desc, out.diags);
+  if (out.scene && resolver && !resolve_textures(*out.scene, *resolver, out.diags))
+    out.scene.reset();
   return out;
 }
 

@@ -17,7 +17,7 @@
 namespace rayfarm {
 namespace {
 
-constexpr size_t kMaxAttrs = 4;  // the most any entity has (a material)
+constexpr size_t kMaxAttrs = 5;  // the most any entity it reads has (a material)
 
 // One entity's attribute values, by their place in the entity's spec.
 struct Values {
@@ -40,41 +40,41 @@ class FastLoader {
     size_t braces = 0;
     for (char c : text_) braces += c == '{';
     braces = std::min(braces, text_.size() / 16 + 1);  // at most one entity per 16 bytes
-    scene_.spheres.reserve(braces);
-    sphere_materials_.reserve(braces);
+    scene_.objects.reserve(braces);
+    object_materials_.reserve(braces);
     names_[static_cast<int>(EntityKind::sphere)].reserve(braces);
     for (;;) {
       const Token t = lex_.next();
       if (t.kind == Token::end) return true;
       if (t.kind != Token::word) return false;
       const EntitySpec* spec = find_entity(t.text);
-      if (!spec || !entity(*spec, t)) return false;
+      if (!spec || !spec->fast_path || !entity(*spec, t)) return false;
     }
   }
 
   // Appends the entities of the part of the file that follows this one; false if a name
   // there repeats one here.
   bool append(FastLoader&& rest) {
-    auto unique = [&](EntityKind kind, const auto& objects) {
-      for (const auto& o : objects)
-        if (!o.name.empty() && names_[static_cast<int>(kind)].find(o.name)) return false;
-      return true;
+    auto unique = [&](EntityKind kind, const std::string& name) {
+      return name.empty() || !names_[static_cast<int>(kind)].find(name);
     };
     Scene& more = rest.scene_;
-    if (!unique(EntityKind::camera, more.cameras) || !unique(EntityKind::material, more.materials) ||
-        !unique(EntityKind::light, more.lights) || !unique(EntityKind::sphere, more.spheres) ||
-        !unique(EntityKind::plane, more.planes))
-      return false;
+    for (const Camera& c : more.cameras)
+      if (!unique(EntityKind::camera, c.name)) return false;
+    for (const Material& m : more.materials)
+      if (!unique(EntityKind::material, m.name)) return false;
+    for (const Light& l : more.lights)
+      if (!unique(EntityKind::light, l.name)) return false;
+    for (const Object& o : more.objects)
+      if (!unique(o.kind, o.name)) return false;
     auto move_all = [](auto& to, auto& from) {
       to.insert(to.end(), std::make_move_iterator(from.begin()), std::make_move_iterator(from.end()));
     };
     move_all(scene_.cameras, more.cameras);
     move_all(scene_.materials, more.materials);
     move_all(scene_.lights, more.lights);
-    move_all(scene_.spheres, more.spheres);
-    move_all(scene_.planes, more.planes);
-    move_all(sphere_materials_, rest.sphere_materials_);
-    move_all(plane_materials_, rest.plane_materials_);
+    move_all(scene_.objects, more.objects);
+    move_all(object_materials_, rest.object_materials_);
     return true;
   }
 
@@ -86,16 +86,11 @@ class FastLoader {
     materials.reserve(scene_.materials.size());
     for (size_t i = 0; i < scene_.materials.size(); ++i)
       materials.insert(scene_.materials[i].name, static_cast<int>(i));
-    auto resolve = [&](auto& objects, const std::vector<std::string_view>& names) {
-      for (size_t i = 0; i < objects.size(); ++i) {
-        const int* index = materials.find(names[i]);
-        if (!index) return false;
-        objects[i].material = *index;
-      }
-      return true;
-    };
-    if (!resolve(scene_.spheres, sphere_materials_) || !resolve(scene_.planes, plane_materials_))
-      return std::nullopt;
+    for (size_t i = 0; i < scene_.objects.size(); ++i) {
+      const int* index = materials.find(object_materials_[i]);
+      if (!index) return std::nullopt;
+      scene_.objects[i].material = *index;
+    }
     return std::move(scene_);
   }
 
@@ -138,7 +133,7 @@ class FastLoader {
       while (lex_.peek().kind == Token::word && starts_like_number(lex_.peek().text)) {
         if (n == hi) return false;
         const std::optional<double> x = parse_number(lex_.next().text);
-        if (!x || !value_problem(attr->kind, *x).empty()) return false;
+        if (!x || !value_problem(*attr, *x).empty()) return false;
         values.v[k][n++] = *x;
       }
       if (!valid_value_count(attr->kind, n)) return false;
@@ -154,7 +149,7 @@ class FastLoader {
     return true;
   }
 
-  // Attribute places follow the schema table (core/src/schema.cpp).
+  // Attribute places follow the schema table (scene/entities/*.cpp).
   void add(EntityKind kind, std::string name, Where where, const Values& v) {
     switch (kind) {
       case EntityKind::camera:
@@ -163,18 +158,29 @@ class FastLoader {
         break;
       case EntityKind::material:
         scene_.materials.push_back({std::move(name), std::move(where), v.vec3(0), v.vec3(1),
-                                    v.vec3(2), v.v[3][0]});
+                                    v.vec3(2),
+                                    v.seen[3] ? std::optional<double>(v.v[3][0]) : std::nullopt,
+                                    v.v[4][0]});
         break;
-      case EntityKind::light:
-        scene_.lights.push_back({std::move(name), std::move(where), v.vec3(0), v.vec3(1)});
+      case EntityKind::light: {
+        Light& l = scene_.lights.emplace_back();
+        l.name = std::move(name);
+        l.where = std::move(where);
+        l.location = v.vec3(0);
+        l.emissivity = v.vec3(1);
         break;
+      }
       case EntityKind::sphere:
-        scene_.spheres.push_back({std::move(name), std::move(where), v.vec3(1), v.v[2][0], -1});
-        sphere_materials_.push_back(v.material);
+        scene_.objects.push_back({std::move(name), std::move(where), kind, -1,
+                                  Sphere{v.vec3(1), v.v[2][0]}});
+        object_materials_.push_back(v.material);
         break;
       case EntityKind::plane:
-        scene_.planes.push_back({std::move(name), std::move(where), v.vec3(1), v.vec3(2), -1});
-        plane_materials_.push_back(v.material);
+        scene_.objects.push_back({std::move(name), std::move(where), kind, -1,
+                                  Plane{v.vec3(1), v.vec3(2)}});
+        object_materials_.push_back(v.material);
+        break;
+      default:  // only kinds with fast_path in the schema get here
         break;
     }
   }
@@ -182,8 +188,8 @@ class FastLoader {
   std::string_view text_;
   ModelLexer lex_;
   Scene scene_;
-  NameSet<char> names_[5];  // names per entity kind: a repeated one is an error
-  std::vector<std::string_view> sphere_materials_, plane_materials_;
+  NameSet<char> names_[kEntityKinds];  // names per entity kind: a repeated one is an error
+  std::vector<std::string_view> object_materials_;  // per object: its material's name
 };
 
 // Where a large file can be cut in two: the start of a line that begins with an entity

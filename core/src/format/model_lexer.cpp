@@ -12,7 +12,9 @@ constexpr auto kClass = [] {
   struct Table {
     unsigned char c[256] = {};
   } t;
-  for (char c : {' ', '\t', '\r', '\v', '\f'}) t.c[static_cast<unsigned char>(c)] = kSpace | kWordEnd;
+  // '<', ',' and '>' separate too: some course files write vectors as <x,y,z>.
+  for (char c : {' ', '\t', '\r', '\v', '\f', '<', ',', '>'})
+    t.c[static_cast<unsigned char>(c)] = kSpace | kWordEnd;
   t.c[static_cast<unsigned char>('\n')] = kSpace | kNewline | kWordEnd;
   t.c[static_cast<unsigned char>('{')] = kWordEnd;
   t.c[static_cast<unsigned char>('}')] = kWordEnd;

@@ -59,8 +59,8 @@ class ModelParser {
         lex_.next();
       } else if (t.kind == Token::open) {
         diags_.error("syntax",
-                     "unexpected '{': expected an entity (camera, material, light, "
-                     "sphere, plane)",
+                     "unexpected '{': expected an entity (" + std::string(entity_keyword_list()) +
+                         ")",
                      at(t));
         skip_block();
       } else if (const EntitySpec* spec = find_entity(t.text)) {
@@ -78,12 +78,19 @@ class ModelParser {
   // cause "no camera" or "undefined material".
   std::optional<EntityDesc> unknown_entity() {
     Token t = lex_.next();
+    if (std::string_view why = unsupported_entity(t.text); !why.empty()) {
+      diags_.error("unsupported-entity", std::string(why), at(t));
+      if (lex_.peek().kind == Token::word && lex_.peek(1).kind == Token::open) lex_.next();
+      if (lex_.peek().kind == Token::open) skip_block();
+      return std::nullopt;
+    }
     std::string hint = nearest_word(t.text, entity_keywords());
     std::string what = looks_like_value(t.text)
                            ? "unexpected value " + quoted(t.text) + " outside an entity"
                            : "unknown entity " + quoted(t.text);
     diags_.error("unknown-entity",
-                 with_hint(what + "; expected camera, material, light, sphere or plane", hint),
+                 with_hint(what + "; expected one of: " + std::string(entity_keyword_list()),
+                           hint),
                  at(t));
     std::optional<EntityDesc> stand_in;
     if (const EntitySpec* guess = hint.empty() ? nullptr : find_entity(hint)) {
@@ -247,21 +254,29 @@ class ModelParser {
     else
       first_line = key.line;
 
-    if (attr.kind == ValueKind::material_ref) {
+    if (is_word_kind(attr.kind)) {
+      // A material is a name; a texture reference or file name any word (a path may start
+      // with a digit or a dot). Either way not the next attribute or entity.
+      const bool material = attr.kind == ValueKind::material_ref;
       const Token& v = lex_.peek();
-      if (v.kind != Token::word || looks_like_value(v.text) ||
+      if (v.kind != Token::word || (material && looks_like_value(v.text)) ||
           (find_attr(spec, v.text) && lex_.peek(1).kind == Token::word) ||
           (find_entity(v.text) && starts_entity(1))) {
-        diags_.error("missing-value", "'" + a.key + "' needs a material name", at(v));
-        if (v.kind == Token::word && looks_like_value(v.text)) lex_.next();
+        diags_.error("missing-value",
+                     "'" + a.key + "' needs " + (material ? "a material name" : describe(attr)),
+                     at(v));
+        if (v.kind == Token::word && material && looks_like_value(v.text)) lex_.next();
         if (!duplicate) e.invalid_keys.push_back(a.key);
         return;
       }
       Token name = lex_.next();
       a.word = std::string(name.text);
       a.value_where.push_back(at(name));
-      if (!is_valid_name(name.text)) {
-        diags_.error("bad-name", "invalid material name " + quoted(name.text), at(name));
+      if (material ? !is_valid_name(name.text) : !is_valid_path(name.text)) {
+        diags_.error("bad-name",
+                     std::string(material ? "invalid material name " : "invalid file name ") +
+                         quoted(name.text),
+                     at(name));
         if (!duplicate) e.invalid_keys.push_back(a.key);
         return;
       }
@@ -300,7 +315,7 @@ class ModelParser {
     }
     if (!bad && !valid_value_count(attr.kind, n)) {
       diags_.error("value-count",
-                   "'" + a.key + "' takes " + std::string(describe(attr.kind)) + ", got " +
+                   "'" + a.key + "' takes " + describe(attr) + ", got " +
                        std::to_string(n) + (n == 1 ? " value" : " values"),
                    n > hi ? first_extra : a.where);
       bad = true;

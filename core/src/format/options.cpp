@@ -31,6 +31,7 @@ constexpr OptionSpec kOptions[] = {
     {"target_error", ">=0", "stop sampling once the error estimate (8-bit levels) is below"},
     {"time_limit", ">=0", "seconds; stop sampling when out of time"},
     {"specialize", "true|false", "run only the pipeline parts the scene needs (false: testing)"},
+    {"profile", "lecture|cpsc102", "TEMPORARY"},
 };
 
 // A value as echoed in a message, shortened.
@@ -133,6 +134,12 @@ std::optional<std::string> apply_option(RenderOptions& o, std::string_view name,
       return "must be png or ppm, got '" + shown(value) + "'";
     return std::nullopt;
   }
+  if (name == "profile") {  // TEMPORARY until the options table lands
+    if (value == "lecture") o.profile = Profile::lecture;
+    else if (value == "cpsc102") o.profile = Profile::cpsc102;
+    else return "must be lecture or cpsc102";
+    return std::nullopt;
+  }
   if (name == "camera") {
     if (value.empty() || value.size() > 256) return "must be a camera name";
     o.camera = std::string(value);
@@ -218,6 +225,7 @@ std::vector<std::pair<std::string, std::string>> option_pairs(const RenderOption
       {"target_error", format_number(o.target_error)},
       {"time_limit", format_number(o.time_limit)},
       {"specialize", o.specialize ? "true" : "false"},
+      {"profile", o.profile == Profile::lecture ? "lecture" : "cpsc102"},
   };
 }
 

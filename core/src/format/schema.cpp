@@ -1,56 +1,43 @@
-// The entity/attribute table of the scene format (SPEC §1).
+// Lookups in the scene format's table (the rows are in scene/entities/, collected by
+// scene/registry.cpp) and the value kinds' rules.
 #include "rayfarm/schema.h"
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 namespace rayfarm {
 namespace {
 
 using V = ValueKind;
 
-constexpr AttrSpec kCamera[] = {
-    {"pixeldim", V::pixel_dims, true, {0, 0, 0}},
-    {"worlddim", V::window_dims, true, {0, 0, 0}},
-    {"viewpoint", V::point, true, {0, 0, 0}},
-};
-constexpr AttrSpec kMaterial[] = {
-    {"ambient", V::colour, false, {0, 0, 0}},
-    {"diffuse", V::colour, false, {0, 0, 0}},
-    {"specular", V::colour, false, {0, 0, 0}},
-    {"shininess", V::positive, false, {32, 0, 0}},
-};
-constexpr AttrSpec kLight[] = {
-    {"location", V::point, true, {0, 0, 0}},
-    {"emissivity", V::colour, false, {1, 1, 1}},
-};
-constexpr AttrSpec kSphere[] = {
-    {"material", V::material_ref, true, {0, 0, 0}},
-    {"center", V::point, true, {0, 0, 0}},
-    {"radius", V::positive, true, {0, 0, 0}},
-};
-constexpr AttrSpec kPlane[] = {
-    {"material", V::material_ref, true, {0, 0, 0}},
-    {"normal", V::direction, true, {0, 0, 0}},
-    {"point", V::point, true, {0, 0, 0}},
+// Keyword lists derived from the registry once.
+struct Keywords {
+  std::vector<std::string_view> all;
+  std::vector<std::string_view> by_role[5];
+  std::string list;
+  Keywords() {
+    for (int k = 0; k < kEntityKinds; ++k) {
+      const EntitySpec& spec = entity_spec(static_cast<EntityKind>(k));
+      all.push_back(spec.keyword);
+      by_role[static_cast<int>(spec.role)].push_back(spec.keyword);
+      list += (list.empty() ? "" : ", ") + std::string(spec.keyword);
+    }
+  }
 };
 
-constexpr EntitySpec kEntities[] = {
-    {EntityKind::camera, "camera", false, kCamera},
-    {EntityKind::material, "material", true, kMaterial},
-    {EntityKind::light, "light", false, kLight},
-    {EntityKind::sphere, "sphere", false, kSphere},
-    {EntityKind::plane, "plane", false, kPlane},
-};
-
-constexpr std::string_view kKeywords[] = {"camera", "material", "light", "sphere", "plane"};
+const Keywords& keywords() {
+  static const Keywords k;
+  return k;
+}
 
 }  // namespace
 
-const EntitySpec& entity_spec(EntityKind kind) { return kEntities[static_cast<int>(kind)]; }
-
 const EntitySpec* find_entity(std::string_view keyword) {
-  for (const EntitySpec& e : kEntities)
-    if (e.keyword == keyword) return &e;
+  for (int k = 0; k < kEntityKinds; ++k) {
+    const EntitySpec& spec = entity_spec(static_cast<EntityKind>(k));
+    if (spec.keyword == keyword) return &spec;
+  }
   return nullptr;
 }
 
@@ -60,7 +47,18 @@ const AttrSpec* find_attr(const EntitySpec& entity, std::string_view key) {
   return nullptr;
 }
 
-std::span<const std::string_view> entity_keywords() { return kKeywords; }
+std::span<const std::string_view> entity_keywords() { return keywords().all; }
+std::string_view entity_keyword_list() { return keywords().list; }
+std::span<const std::string_view> keywords_of(EntityRole role) {
+  return keywords().by_role[static_cast<int>(role)];
+}
+
+std::string_view unsupported_entity(std::string_view keyword) {
+  if (keyword == "pplane")
+    return "'pplane' is not supported: the course named it (a plane with an integer shader) but "
+           "never defined its attributes or how it looks; use plane, tiled_plane or texplane";
+  return {};
+}
 
 std::array<int, 2> value_count(ValueKind kind) {
   switch (kind) {
@@ -69,8 +67,13 @@ std::array<int, 2> value_count(ValueKind kind) {
     case V::point:
     case V::direction: return {3, 3};
     case V::colour: return {1, 3};
-    case V::positive: return {1, 1};
-    case V::material_ref: return {0, 0};
+    case V::positive:
+    case V::nonnegative:
+    case V::fraction:
+    case V::angle:
+    case V::integer: return {1, 1};
+    case V::material_ref:
+    case V::word: return {0, 0};
   }
   return {0, 0};
 }
@@ -81,9 +84,11 @@ bool valid_value_count(ValueKind kind, int n) {
   return n >= lo && n <= hi;
 }
 
-std::string_view value_problem(ValueKind kind, double v) {
+bool is_word_kind(ValueKind kind) { return kind == V::material_ref || kind == V::word; }
+
+std::string value_problem(const AttrSpec& attr, double v) {
   if (!std::isfinite(v)) return "must be a finite number";
-  switch (kind) {
+  switch (attr.kind) {
     case V::pixel_dims:
       if (v < 1 || v > 65535 || v != std::floor(v)) return "values must be integers from 1 to 65535";
       break;
@@ -96,21 +101,44 @@ std::string_view value_problem(ValueKind kind, double v) {
     case V::positive:
       if (!(v > 0)) return "must be > 0";
       break;
+    case V::nonnegative:
+      if (v < 0) return "must be >= 0";
+      break;
+    case V::fraction:
+      if (!(v >= 0 && v <= 1)) return "must be from 0 to 1";
+      break;
+    case V::angle:
+      if (!(v > 0 && v < 180)) return "must be an angle in degrees above 0 and below 180";
+      break;
+    case V::integer:
+      if (v != std::floor(v) || v < attr.lo || v > attr.hi)
+        return attr.lo == attr.hi ? "must be " + std::to_string(attr.lo)
+                                  : "must be an integer from " + std::to_string(attr.lo) + " to " +
+                                        std::to_string(attr.hi);
+      break;
     default:
       break;
   }
   return {};
 }
 
-std::string_view describe(ValueKind kind) {
-  switch (kind) {
+std::string describe(const AttrSpec& attr) {
+  switch (attr.kind) {
     case V::pixel_dims: return "2 integers >= 1";
     case V::window_dims: return "2 numbers > 0";
     case V::point: return "3 numbers";
     case V::direction: return "3 numbers, not all 0";
     case V::colour: return "3 numbers >= 0, or 1 number for all three";
     case V::positive: return "1 number > 0";
+    case V::nonnegative: return "1 number >= 0";
+    case V::fraction: return "1 number from 0 to 1";
+    case V::angle: return "1 angle in degrees";
+    case V::integer:
+      return attr.lo == attr.hi ? "the integer " + std::to_string(attr.lo)
+                                : "1 integer from " + std::to_string(attr.lo) + " to " +
+                                      std::to_string(attr.hi);
     case V::material_ref: return "a material name";
+    case V::word: return "a texture name or file path";
   }
   return "";
 }
@@ -123,6 +151,17 @@ bool is_valid_name(std::string_view name) {
   for (char c : name.substr(1))
     if (!alpha(c) && !digit(c) && c != '.' && c != '-') return false;
   return true;
+}
+
+bool is_valid_path(std::string_view path) {
+  if (path.empty() || path.size() > static_cast<size_t>(kMaxPathLength)) return false;
+  // What the model file could not write back as one word: space, braces, comment starts,
+  // and the separators of <x,y,z>.
+  for (char c : path)
+    if (static_cast<unsigned char>(c) <= 0x20 || c == 0x7f || c == '{' || c == '}' || c == '#' ||
+        c == ',' || c == '<' || c == '>')
+      return false;
+  return path.find("//") == std::string_view::npos;
 }
 
 const AttrDesc* EntityDesc::find(std::string_view key) const {

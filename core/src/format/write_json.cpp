@@ -22,9 +22,8 @@ Json number(double v) {
 }
 
 Json attr_value(const AttrSpec& spec, const AttrDesc& a) {
-  if (spec.kind == ValueKind::material_ref) return a.word;
-  if (a.numbers.size() == 1 && (spec.kind == ValueKind::positive || spec.kind == ValueKind::colour))
-    return number(a.numbers[0]);
+  if (is_word_kind(spec.kind)) return a.word;
+  if (a.numbers.size() == 1 && value_count(spec.kind)[0] == 1) return number(a.numbers[0]);
   Json arr = Json::array();
   for (double v : a.numbers) arr.push_back(number(v));
   return arr;
@@ -106,30 +105,28 @@ std::string write_json(const SceneDesc& desc) {
     return n;
   };
   for (const EntityDesc& e : desc.entities) {
-    switch (e.kind) {
-      case EntityKind::camera:
+    const EntitySpec& spec = entity_spec(e.kind);
+    switch (spec.role) {
+      case EntityRole::camera:
         if (single)
           root["camera"] = attrs_of(e);
         else
           append(root["cameras"], e.name.empty() ? free_name() : e.name, attrs_of(e));
         break;
-      case EntityKind::material:
+      case EntityRole::material:
         append(root["materials"], e.name, attrs_of(e));
         break;
-      case EntityKind::light: {
-        Json l = Json::object();
-        if (!e.name.empty()) l["name"] = e.name;
-        l.update(attrs_of(e));
-        root["lights"].push_back(std::move(l));
+      case EntityRole::texture:
+        append(root["textures"], e.name, attrs_of(e));
         break;
-      }
-      case EntityKind::sphere:
-      case EntityKind::plane: {
+      case EntityRole::light:
+      case EntityRole::object: {
         Json o = Json::object();
-        o["type"] = entity_spec(e.kind).keyword;
+        // A plain light needs no type: "lights" entries are lights unless they say otherwise.
+        if (e.kind != EntityKind::light) o["type"] = spec.keyword;
         if (!e.name.empty()) o["name"] = e.name;
         o.update(attrs_of(e));
-        root["objects"].push_back(std::move(o));
+        root[spec.role == EntityRole::light ? "lights" : "objects"].push_back(std::move(o));
         break;
       }
     }

@@ -8,6 +8,7 @@
 #include <glm/geometric.hpp>
 
 #include "rayfarm/writers.h"
+#include "scene/registry.h"
 
 namespace rayfarm {
 namespace {
@@ -30,7 +31,7 @@ std::string write_pov(const Scene& scene, const RenderOptions& options) {
   out << "// Exported by rayfarm. Render with:\n"
       << "//   povray +I<this file> +W" << w << " +H" << h << " -A +WT2 +O<out.png>\n"
       << "#version 3.7;\n"
-      << "global_settings { max_trace_level " << options.max_depth + 1
+      << "global_settings { max_trace_level " << options.effective_max_depth() + 1
       << " assumed_gamma 1.0 ambient_light rgb <1, 1, 1> }\n"
       << "background { color rgb " << vec({options.background[0], options.background[1],
                                           options.background[2]})
@@ -46,41 +47,43 @@ std::string write_pov(const Scene& scene, const RenderOptions& options) {
       << vec(centre - eye) << "\n  right " << vec({cam.world_width * sx, 0, 0}) << "\n  up "
       << vec({0, cam.world_height * sy, 0}) << "\n}\n\n";
 
-  for (const Light& l : scene.lights)
-    out << "light_source { " << vec(pov(l.location)) << " color rgb " << vec(l.emissivity)
-        << " fade_distance 1 fade_power 1" << (options.shadows ? "" : " shadowless") << " }\n";
+  PovWriter writer{scene, options, out};
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    entity_hooks(kind_of(scene.lights[i])).pov(writer, static_cast<int>(i));
   out << '\n';
 
   double typical = 0;
-  for (const Sphere& s : scene.spheres) typical += glm::length(s.center - cam.viewpoint);
-  typical = scene.spheres.empty() ? 5.0 : typical / scene.spheres.size();
+  std::size_t spheres = 0;
+  for (const Object& o : scene.objects)
+    if (const Sphere* s = o.as<Sphere>()) {
+      typical += glm::length(s->center - cam.viewpoint);
+      ++spheres;
+    }
+  typical = spheres == 0 ? 5.0 : typical / spheres;
   if (!(typical > 1e-9)) typical = 1;
 
   for (size_t i = 0; i < scene.materials.size(); ++i) {
     const Material& m = scene.materials[i];
+    const double shininess = m.shininess.value_or(32);
     double highlight = (m.specular.x + m.specular.y + m.specular.z) / 3;
     out << "#declare M" << i << " = texture { // " << m.name << "\n  pigment { color rgb "
-        << vec(m.diffuse) << " }\n  finish { ambient " << vec(m.ambient / typical)
-        << " diffuse 1";
+        << vec(m.diffuse);
+    if (m.transparency > 0) out << " transmit " << format_number(m.transparency);
+    out << " }\n  finish { ambient " << vec(m.ambient / typical) << " diffuse 1";
     if (highlight > 0) {
       out << (options.highlight == Highlight::blinn ? " specular " : " phong ")
           << format_number(highlight) << (options.highlight == Highlight::blinn ? " roughness "
                                                                                  : " phong_size ")
-          << format_number(options.highlight == Highlight::blinn ? 1 / m.shininess : m.shininess)
+          << format_number(options.highlight == Highlight::blinn ? 1 / std::max(shininess, 1e-9)
+                                                                 : shininess)
           << " reflection { " << vec(m.specular) << " }";
     }
     out << " }\n}\n";
   }
   out << '\n';
 
-  for (const Sphere& s : scene.spheres)
-    out << "sphere { " << vec(pov(s.center)) << ", " << format_number(s.radius)
-        << " texture { M" << s.material << " } }\n";
-  for (const Plane& p : scene.planes) {
-    glm::dvec3 n = glm::normalize(pov(p.normal));
-    out << "plane { " << vec(n) << ", " << format_number(glm::dot(n, pov(p.point)))
-        << " texture { M" << p.material << " } }\n";
-  }
+  for (size_t i = 0; i < scene.objects.size(); ++i)
+    entity_hooks(scene.objects[i].kind).pov(writer, static_cast<int>(i));
   return out.str();
 }
 

@@ -6,6 +6,7 @@
 #include <exception>
 #include <limits>
 #include <thread>
+#include <variant>
 
 namespace rayfarm {
 namespace {
@@ -24,6 +25,122 @@ Vec3<T> narrow(const glm::dvec3& v) {
 
 bool nonzero(const glm::dvec3& c) { return c.x > 0 || c.y > 0 || c.z > 0; }
 
+// The lecture's shininess when a material gives none (SPEC §1).
+constexpr double kLectureShininess = 32;
+
+// A plane's frame: u is xdir's part in the plane, v = n × u.
+struct Frame {
+  glm::dvec3 n, u, v;
+};
+Frame frame_of(const glm::dvec3& normal, const glm::dvec3& xdir) {
+  const glm::dvec3 n = glm::normalize(normal);
+  const glm::dvec3 u = glm::normalize(xdir - glm::dot(xdir, n) * n);
+  return {n, u, glm::cross(n, u)};
+}
+
+// The bounded shapes other than spheres, from the scene's objects.
+template <class T>
+struct ShapeMaker {
+  const Scene& scene;
+  const Camera& camera;
+
+  PreparedShape<T> window(typename PreparedShape<T>::Kind kind, const Plane& plane,
+                          const Window& w) const {
+    const Frame f = frame_of(plane.normal, w.xdir);
+    PreparedShape<T> s;
+    s.kind = kind;
+    s.normal = narrow<T>(f.n);
+    s.point = narrow<T>(plane.point);
+    s.u = narrow<T>(f.u);
+    s.v = narrow<T>(f.v);
+    s.width = narrow<T>(w.width);
+    s.height = narrow<T>(w.height);
+    return s;
+  }
+
+  std::optional<PreparedShape<T>> operator()(const FinitePlane& f) const {
+    return window(PreparedShape<T>::finite_plane, f.plane, f.window);
+  }
+  std::optional<PreparedShape<T>> operator()(const TexPlane& t) const {
+    PreparedShape<T> s = window(PreparedShape<T>::tex_plane, t.plane, t.window);
+    s.texture = scene.textures.at(t.texture).image.get();
+    s.mode = t.mode;
+    // One texel per pixel of the camera's own size, whatever size is rendered.
+    s.pixel_w = narrow<T>(camera.world_width / camera.width);
+    s.pixel_h = narrow<T>(camera.world_height / camera.height);
+    return s;
+  }
+  std::optional<PreparedShape<T>> operator()(const Triangle& t) const {
+    const Plane plane = t.plane ? *t.plane
+                                : Plane{glm::cross(t.vertex[1] - t.vertex[0],
+                                                   t.vertex[2] - t.vertex[1]),
+                                        t.vertex[0]};
+    const glm::dvec3 n = glm::normalize(plane.normal);
+    // The frame's x axis along the first edge as seen in the plane.
+    const glm::dvec3 edge = t.vertex[1] - t.vertex[0];
+    const glm::dvec3 xdir = glm::length(edge - glm::dot(edge, n) * n) > 0 ? edge : t.vertex[2] - t.vertex[0];
+    PreparedShape<T> s = window(PreparedShape<T>::triangle, plane, {xdir, 0, 0});
+    const Frame f = frame_of(plane.normal, xdir);
+    for (int i = 0; i < 3; ++i) {
+      const glm::dvec3 q = t.vertex[i] - plane.point;
+      s.tx[i] = narrow<T>(glm::dot(f.u, q));
+      s.ty[i] = narrow<T>(glm::dot(f.v, q));
+    }
+    return s;
+  }
+  std::optional<PreparedShape<T>> operator()(const Revsurf& r) const {
+    PreparedShape<T> s;
+    s.kind = PreparedShape<T>::revsurf;
+    s.point = narrow<T>(r.base);
+    s.normal = narrow<T>(glm::normalize(r.direction));
+    s.height = narrow<T>(r.height);
+    s.surfer = r.surfer;
+    return s;
+  }
+  template <class Other>
+  std::optional<PreparedShape<T>> operator()(const Other&) const {
+    return std::nullopt;  // spheres and planes have their own arrays
+  }
+};
+
+// The box of a bounded shape, in double.
+template <class T>
+BvhBox shape_box(const PreparedShape<T>& s) {
+  const glm::dvec3 o(s.point), u(s.u), v(s.v), a(s.normal);
+  auto box_of = [](std::initializer_list<glm::dvec3> points) {
+    BvhBox b{glm::dvec3(std::numeric_limits<double>::infinity()),
+             glm::dvec3(-std::numeric_limits<double>::infinity())};
+    for (const glm::dvec3& q : points) {
+      b.lo = glm::min(b.lo, q);
+      b.hi = glm::max(b.hi, q);
+    }
+    return b;
+  };
+  if (s.kind == PreparedShape<T>::revsurf) {
+    const double r = profile_max_radius<double>(s.surfer);
+    const glm::dvec3 top = o + static_cast<double>(s.height) * a;
+    const glm::dvec3 ext = r * glm::sqrt(glm::max(glm::dvec3(0), 1.0 - a * a));
+    return box_of({o - ext, o + ext, top - ext, top + ext});
+  }
+  if (s.kind == PreparedShape<T>::triangle) {
+    glm::dvec3 q[3];
+    for (int i = 0; i < 3; ++i)
+      q[i] = o + static_cast<double>(s.tx[i]) * u + static_cast<double>(s.ty[i]) * v;
+    return box_of({q[0], q[1], q[2]});
+  }
+  const double w = static_cast<double>(s.width), h = static_cast<double>(s.height);
+  return box_of({o, o + w * u, o + h * v, o + w * u + h * v});
+}
+
+// Puts the other shapes behind a hierarchy of their own.
+template <class T>
+void build_shape_bvh(PreparedScene<T>& p) {
+  std::vector<BvhBox> boxes;
+  boxes.reserve(p.shapes.size());
+  for (const PreparedShape<T>& s : p.shapes) boxes.push_back(shape_box(s));
+  p.shape_bvh = build_bvh(boxes, {});
+}
+
 }  // namespace
 
 std::vector<std::string> Features::parts() const {
@@ -32,6 +149,7 @@ std::vector<std::string> Features::parts() const {
   if (shadows) out.push_back("shadows");
   if (highlight) out.push_back("highlight");
   if (reflection) out.push_back("reflection");
+  if (transparency) out.push_back("transparency");
   if (supersampling) out.push_back("supersampling");
   if (bvh) out.push_back("bvh");
   if (screen_bins) out.push_back("screen-bins");
@@ -104,7 +222,9 @@ void build_ray_culling(PreparedScene<T>& p) {
   }
   p.features.screen_bins = !p.screen_bins.empty();
 
-  if (!p.features.shadows) return;
+  // Light buffers answer "is anything in the way"; through translucent objects the shadow
+  // ray must find every one on its way, so they step aside.
+  if (!p.features.shadows || p.features.transparency) return;
   // Each buffer costs about one pass over the spheres and a few entries per sphere: past
   // these budgets (time, and memory a small multiple of the scene's), the rest of the
   // lights keep the hierarchy.
@@ -137,37 +257,76 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   p.world_height = narrow<T>(cam.world_height);
   // A miss is a displayable colour; clamping here keeps every sample in [0, 1].
   for (int c = 0; c < 3; ++c) p.background[c] = narrow<T>(std::clamp(options.background[c], 0.0, 1.0));
-  p.max_dist = narrow<T>(options.max_dist);
+  p.max_dist = narrow<T>(options.effective_max_dist());
   p.bailout = narrow<T>(options.bailout);
-  p.max_depth = options.max_depth;
+  p.max_depth = options.effective_max_depth();
   p.blinn = options.highlight == Highlight::blinn;
   p.spp = options.spp;
   p.seed = options.seed;
 
   for (const Material& m : scene.materials) {
     PreparedMaterial<T> pm{narrow<T>(m.ambient), narrow<T>(m.diffuse), narrow<T>(m.specular),
-                           narrow<T>(m.shininess),
+                           narrow<T>(m.shininess.value_or(kLectureShininess)),
                            narrow<T>(std::max({m.specular.x, m.specular.y, m.specular.z})),
                            nonzero(m.specular), nonzero(m.specular)};
+    pm.transparency = narrow<T>(m.transparency);
+    const double most = std::max({m.diffuse.x, m.diffuse.y, m.diffuse.z});
+    if (most > 0) pm.filter = narrow<T>(m.transparency * m.diffuse / most);
     p.materials.push_back(pm);
   }
-  for (const Sphere& s : scene.spheres)
-    p.spheres.push_back({narrow<T>(s.center), narrow<T>(s.radius), s.material});
-  for (const Plane& pl : scene.planes) {
-    glm::dvec3 n = glm::normalize(pl.normal);
-    p.planes.push_back({narrow<T>(n), narrow<T>(pl.point), pl.material});
+  const ShapeMaker<T> make{scene, cam};
+  for (const Object& o : scene.objects)
+    if (const Sphere* s = o.as<Sphere>())
+      p.spheres.push_back({narrow<T>(s->center), narrow<T>(s->radius), o.material});
+  for (const Object& o : scene.objects) {
+    if (const Plane* pl = o.as<Plane>()) {
+      p.planes.push_back({narrow<T>(glm::normalize(pl->normal)), narrow<T>(pl->point), o.material});
+    } else if (const TiledPlane* t = o.as<TiledPlane>()) {
+      PreparedPlane<T> pp{narrow<T>(glm::normalize(t->plane.normal)), narrow<T>(t->plane.point),
+                          o.material};
+      pp.alt_material = t->alt_material;
+      pp.world_xz = t->world_xz;
+      if (!t->world_xz) {
+        const Frame f = frame_of(t->plane.normal, t->tile.xdir);
+        pp.u = narrow<T>(f.u);
+        pp.v = narrow<T>(f.v);
+      }
+      pp.tile_w = narrow<T>(t->tile.width);
+      pp.tile_h = narrow<T>(t->tile.height);
+      p.planes.push_back(pp);
+    }
   }
+  for (const Object& o : scene.objects)
+    if (auto shape = std::visit(make, o.shape)) {
+      shape->material = o.material;
+      p.shapes.push_back(*shape);
+    }
   bool any_light = false;
   for (const Light& l : scene.lights) {
     const Vec3<T> location = narrow<T>(l.location), a = glm::abs(location);
-    p.lights.push_back({location, narrow<T>(l.emissivity), std::max({a.x, a.y, a.z})});
+    PreparedLight<T> pl;
+    pl.location = location;
+    pl.emissivity = narrow<T>(l.emissivity);
+    pl.scale = std::max({a.x, a.y, a.z});
+    pl.kind = l.kind;
+    if (l.kind == LightKind::spot) {
+      pl.direction = narrow<T>(glm::normalize(l.aim - l.location));
+      pl.cos_theta = narrow<T>(std::cos(l.theta * M_PI / 180));
+    } else if (l.kind == LightKind::projector) {
+      pl.slide = make.window(PreparedShape<T>::tex_plane, {l.normal, l.point}, l.window);
+      pl.slide.texture = scene.textures.at(l.texture).image.get();
+      pl.slide.mode = l.mode;
+    }
+    p.lights.push_back(pl);
     any_light = any_light || nonzero(l.emissivity);
   }
 
-  bool objects = !p.spheres.empty() || !p.planes.empty();
-  bool reflective = false;
-  for (const Sphere& s : scene.spheres) reflective |= nonzero(scene.materials[s.material].specular);
-  for (const Plane& pl : scene.planes) reflective |= nonzero(scene.materials[pl.material].specular);
+  const bool objects = !scene.objects.empty();
+  bool reflective = false, translucent = false;
+  for (const Object& o : scene.objects) {
+    reflective |= nonzero(scene.materials[o.material].specular);
+    translucent |= scene.materials[o.material].transparency > 0;
+  }
 
   Features& f = p.features;
   if (options.specialize) {
@@ -180,6 +339,10 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     for (size_t i = 0; i < p.materials.size(); ++i)
       p.materials[i].lit =
           nonzero(scene.materials[i].diffuse) || (f.highlight && p.materials[i].highlights);
+    // A tiled plane shades with its other material's diffuse on half its squares.
+    for (const PreparedPlane<T>& pl : p.planes)
+      if (pl.alt_material >= 0 && nonzero(scene.materials[pl.alt_material].diffuse))
+        p.materials[pl.material].lit = true;
     // The reference (unspecialized) path always loops, so tests compare the two. The
     // hierarchy and the culling structures are independent: with two threads or more they
     // are built side by side.
@@ -205,6 +368,8 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
       }
     }
     f.bvh = !p.bvh.empty();
+    if (p.shapes.size() >= kBvhMinShapes) build_shape_bvh(p);
+    f.bvh = f.bvh || !p.shape_bvh.empty();
   } else {
     f.lights = true;
     f.shadows = options.shadows;
@@ -212,6 +377,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     f.reflection = true;
     for (auto& m : p.materials) m.reflects = m.highlights = true;
   }
+  f.transparency = translucent;
   f.supersampling = options.spp > 1;
   return p;
 }

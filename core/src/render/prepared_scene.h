@@ -11,6 +11,8 @@
 #include "rayfarm/intersect.h"
 #include "rayfarm/options.h"
 #include "rayfarm/scene.h"
+#include "render/shapes.h"
+#include "render/tile_grid.h"
 
 namespace rayfarm {
 
@@ -20,6 +22,7 @@ struct Features {
   bool highlight = true;   // some material has a specular highlight and there are lights
   bool shadows = true;     // shadow rays: option on, lights and objects present
   bool lights = true;      // any light contributes at all
+  bool transparency = false;  // some material lets light through: rays and shadows go on
   bool supersampling = false;
   bool bvh = false;  // spheres behind a hierarchy instead of a loop
   bool screen_bins = false;    // primary rays find their sphere by projection (screen_bins.h)
@@ -36,6 +39,8 @@ struct PreparedMaterial {
   bool reflects;
   bool highlights;
   bool lit = true;  // lights can add anything: some diffuse, or a highlight
+  T transparency = 0;
+  Vec3<T> filter{0};  // transparency · diffuse / max(diffuse): what it lets through
 };
 
 template <class T>
@@ -58,13 +63,23 @@ struct PreparedPlane {
   Vec3<T> normal;  // unit
   Vec3<T> point;
   int material;
+  // tiled_plane: squares of `material` and `alt_material` (ambient and diffuse), on the
+  // frame (u, v) or, for the 2009 form, on world x and z.
+  int alt_material = -1;
+  bool world_xz = false;
+  Vec3<T> u{0}, v{0};
+  T tile_w = 1, tile_h = 1;
 };
 
 template <class T>
 struct PreparedLight {
-  Vec3<T> location;
-  Vec3<T> emissivity;
-  T scale;  // largest |coordinate| of the location: sets the rounding noise of L = Lp - p
+  Vec3<T> location{0};
+  Vec3<T> emissivity{0};
+  T scale = 0;  // largest |coordinate| of the location: sets the rounding noise of L = Lp - p
+  LightKind kind = LightKind::point;
+  Vec3<T> direction{0};  // spot: the cone's axis
+  T cos_theta = -1;      // spot: lit where the direction to the point is within the cone
+  PreparedShape<T> slide;  // projector: the window its texture lies on
 };
 
 template <class T>
@@ -85,6 +100,7 @@ struct PreparedScene {
   std::vector<PreparedMaterial<T>> materials;
   std::vector<PreparedSphere<T>> spheres;
   std::vector<PreparedPlane<T>> planes;
+  std::vector<PreparedShape<T>> shapes;  // object numbers after the spheres and planes
   std::vector<PreparedLight<T>> lights;
   Features features;
 
@@ -92,13 +108,16 @@ struct PreparedScene {
   std::vector<BvhSphere<T>> bvh_spheres;  // the spheres in bvh.order
   ScreenBins screen_bins;                 // empty: primary rays use `bvh`
   std::vector<LightBuffer> light_buffers;  // per light (each may be empty), or none
-};
+  Bvh shape_bvh;                          // empty: the other shapes are tested in a loop
 
-// Side of the square tiles the renderer works in (and the screen bins are made for).
-inline constexpr int kTileSize = 32;
+  int plane_base() const { return static_cast<int>(spheres.size()); }
+  int shape_base() const { return static_cast<int>(spheres.size() + planes.size()); }
+};
 
 // Below this many spheres a plain loop beats the hierarchy (tests/bench: BM_Closest*).
 inline constexpr std::size_t kBvhMinSpheres = 8;
+// The other shapes cost more per test: a hierarchy pays from fewer of them.
+inline constexpr std::size_t kBvhMinShapes = 4;
 
 // Converts a checked scene for rendering. `camera` is an index into scene.cameras.
 // `build_threads` (0: all cores) only changes how fast the hierarchy is built, never it.

@@ -1,6 +1,6 @@
 // Tiled, progressive rendering: pass k gives every pixel its sample k, tiles of a pass run
 // in any order on any thread, and each pixel sums its samples in sample order, so the bytes
-// never depend on the thread count.
+// never depend on the thread count. The profile decides the pipeline and the film.
 #include "rayfarm/render.h"
 
 #include <chrono>
@@ -9,9 +9,9 @@
 #include <optional>
 #include <thread>
 
-#include "render/prepared_scene.h"
-#include "render/sampler.h"
-#include "render/tracer.h"
+#include "render/cpsc102/reference_pipeline.h"
+#include "render/film.h"
+#include "render/lecture_pipeline.h"
 
 namespace rayfarm {
 namespace {
@@ -22,27 +22,24 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-std::uint8_t to_byte(double c) {  // SPEC §3 step 7
-  c = c > 0 ? (c < 1 ? c : 1.0) : 0.0;
-  return static_cast<std::uint8_t>(std::floor(255 * c + 0.5));
-}
-
-template <class T>
+// Tiles and passes of any pipeline (lecture_pipeline.h, cpsc102/reference_pipeline.h): a
+// pass gives every pixel its next samples; the film (film.h) turns their sums into bytes.
+template <class Pipeline>
 class TiledRender final : public RenderJob {
  public:
-  TiledRender(PreparedScene<T> scene, const RenderOptions& options, double prepare_ms)
-      : s_(std::move(scene)),
+  TiledRender(Pipeline pipeline, const RenderOptions& options, Film film, double prepare_ms)
+      : p_(std::move(pipeline)),
         options_(options),
-        sampler_(s_.spp),
-        tiles_x_((s_.width + kTileSize - 1) / kTileSize),
-        tiles_y_((s_.height + kTileSize - 1) / kTileSize),
-        image_(s_.width, s_.height),
+        film_(film),
+        grid_(p_.width(), p_.height()),
+        passes_(std::max(1, p_.spp() / p_.samples_per_pass())),
+        image_(p_.width(), p_.height()),
         prepare_ms_(prepare_ms) {
-    if (s_.spp > 1) {
-      sum_.assign(static_cast<size_t>(s_.width) * s_.height * 3, 0.0);
+    if (passes_ > 1) {
+      sum_.assign(static_cast<size_t>(p_.width()) * p_.height() * 3, 0.0);
       sum_sq_.assign(sum_.size(), 0.0);
     }
-    tile_error_.assign(tile_count(), 0.0);
+    tile_error_.assign(grid_.count(), 0.0);
   }
 
   Step run_step() override {
@@ -54,7 +51,7 @@ class TiledRender final : public RenderJob {
         finish("canceled");
         return Step::done;
       }
-      if (next_tile_ == tile_count()) return Step::wait;
+      if (next_tile_ == grid_.count()) return Step::wait;
       if (next_tile_ == 0 && passes_done_ == 0) start_ = Clock::now();
       if (next_tile_ == 0) pass_start_ = Clock::now();
       tile = next_tile_++;
@@ -69,7 +66,7 @@ class TiledRender final : public RenderJob {
     reflection_ += counts.reflection;
     if (!complete || finished_) return finished_ ? Step::done : Step::ran;
     copy_tile(tile, bytes);
-    if (++done_in_pass_ == tile_count()) end_pass();
+    if (++done_in_pass_ == grid_.count()) end_pass();
     return Step::ran;
   }
 
@@ -79,8 +76,8 @@ class TiledRender final : public RenderJob {
     std::lock_guard lock(mu_);
     return finished_;
   }
-  int width() const override { return s_.width; }
-  int height() const override { return s_.height; }
+  int width() const override { return p_.width(); }
+  int height() const override { return p_.height(); }
 
   Image image() const override {
     std::lock_guard lock(mu_);
@@ -96,151 +93,80 @@ class TiledRender final : public RenderJob {
     st.prepare_ms = prepare_ms_;
     if (passes_done_ > 0 || done_in_pass_ > 0 || next_tile_ > 0)
       st.render_ms = ms_between(start_, finished_ ? end_ : Clock::now());
-    st.spp_done = passes_done_;
-    st.spp_target = s_.spp;
+    st.spp_done = passes_done_ * p_.samples_per_pass();
+    st.spp_target = p_.spp();
     st.tiles_done = done_in_pass_;
-    st.tiles_per_pass = tile_count();
+    st.tiles_per_pass = grid_.count();
     st.error_estimate = error_;
-    st.parts = s_.features.parts();
+    st.parts = p_.parts();
     st.stop_reason = stop_reason_;
     st.finished = finished_;
+    // Progress counts passes; a pass of several samples is progress in samples too.
+    if (p_.samples_per_pass() > 1) {
+      st.spp_target = passes_;
+      st.spp_done = passes_done_;
+    }
     return st;
   }
 
  private:
-  int tile_count() const { return tiles_x_ * tiles_y_; }
-
-  // A tile's columns [x0, x1) and image rows [r0, r1) (row 0 at the top).
-  struct TileBounds {
-    int x0, x1, r0, r1;
-  };
-  TileBounds bounds_of(int tile) const {
-    const int x0 = (tile % tiles_x_) * kTileSize, r0 = (tile / tiles_x_) * kTileSize;
-    return {x0, std::min(x0 + kTileSize, s_.width), r0, std::min(r0 + kTileSize, s_.height)};
-  }
-
   // Renders one tile of one pass into `bytes` (its rows top to bottom). Returns false when
   // canceled part way.
   bool render_tile(int tile, int pass, std::vector<std::uint8_t>& bytes, RayCounts& counts) {
-    const auto [x0, x1, r0, r1] = bounds_of(tile);
-    bytes.resize(static_cast<size_t>(x1 - x0) * (r1 - r0) * 3);
-    Tracer<T> tracer(s_);
-    const bool binned = !s_.screen_bins.empty();
-    std::vector<PrimaryRay> rays;
-    if (binned) first_hits(tile, pass, tracer, rays);
-    const bool multi = s_.spp > 1;
-    const double n = pass + 1;
+    const TileBounds b = grid_.bounds(tile);
+    std::vector<glm::dvec3> colours;
     double tile_error = 0;
+    if (!p_.render_tile(b, pass, colours, counts, tile_error,
+                        [&] { return cancel_.load(std::memory_order_relaxed); }))
+      return false;
+    bytes.resize(colours.size() * 3);
     std::uint8_t* out = bytes.data();
-    for (int r = r0; r < r1; ++r) {
-      if (cancel_.load(std::memory_order_relaxed)) return false;
-      const int y = s_.height - 1 - r;  // the top image row is world row H-1
-      for (int x = x0; x < x1; ++x) {
-        Vec3<T> c;
-        if (binned) {
-          const PrimaryRay& ray = rays[static_cast<size_t>(r - r0) * (x1 - x0) + (x - x0)];
-          c = ray.dir ? tracer.primary(*ray.dir, ray.hit) : tracer.primary(pixel_point(x, y, pass));
-        } else {
-          c = tracer.primary(pixel_point(x, y, pass));
-        }
-        if (!multi) {
-          for (int k = 0; k < 3; ++k) *out++ = to_byte(static_cast<double>(c[k]));
-          continue;
-        }
-        size_t i = (static_cast<size_t>(r) * s_.width + x) * 3;
+    const glm::dvec3* c = colours.data();
+    if (passes_ == 1) {
+      for (size_t i = 0; i < colours.size(); ++i, ++c)
+        for (int k = 0; k < 3; ++k) *out++ = film_.to_byte((*c)[k]);
+      tile_error_[tile] = tile_error;
+      return true;
+    }
+    const double n = pass + 1;
+    for (int r = b.r0; r < b.r1; ++r)
+      for (int x = b.x0; x < b.x1; ++x, ++c) {
+        size_t i = (static_cast<size_t>(r) * p_.width() + x) * 3;
         for (int k = 0; k < 3; ++k) {
-          double ck = static_cast<double>(c[k]);
-          sum_[i + k] += ck;
+          double ck = (*c)[k];
+          sum_[i + k] = film_.accumulate(sum_[i + k], ck);
           sum_sq_[i + k] += ck * ck;
-          double mean = sum_[i + k] / n;
-          *out++ = to_byte(mean);
+          double mean = film_.mean(sum_[i + k], pass + 1);
+          *out++ = film_.to_byte(mean);
           if (n >= 2) {
-            double var = (sum_sq_[i + k] - sum_[i + k] * mean) / (n - 1);
+            double var = (sum_sq_[i + k] - sum_[i + k] * (sum_[i + k] / n)) / (n - 1);
             tile_error += (var > 0 ? var : 0) / n;
           }
         }
       }
-    }
     tile_error_[tile] = tile_error;
-    counts = tracer.counts;
     return true;
   }
 
-  struct PrimaryRay {
-    std::optional<Vec3<T>> dir;
-    Hit<T> hit;
-  };
-
-  // The closest hit of every primary ray of the tile, from its screen bin: each sphere is
-  // tested only on the pixels of its rectangle, nearest spheres first, and skipped on pixels
-  // where something nearer than all of it was already hit. Ties go to the lowest index
-  // (spheres before planes), as in Tracer::closest, so the hits are the loop's.
-  void first_hits(int tile, int pass, const Tracer<T>& tracer, std::vector<PrimaryRay>& rays) const {
-    const auto [x0, x1, r0, r1] = bounds_of(tile);
-    const int w = x1 - x0;
-    rays.resize(static_cast<size_t>(w) * (r1 - r0));
-    const T t_max = s_.max_dist;
-    for (int r = r0; r < r1; ++r) {
-      for (int x = x0; x < x1; ++x) {
-        PrimaryRay& ray = rays[static_cast<size_t>(r - r0) * w + (x - x0)];
-        ray = {tracer.primary_direction(pixel_point(x, s_.height - 1 - r, pass)), Hit<T>{}};
-        // Planes first, so spheres behind the plane hit are skipped.
-        if (ray.dir) tracer.closest_plane(s_.eye, *ray.dir, Origin{}, t_max, ray.hit);
-      }
-    }
-    for (const ScreenBinEntry& e : s_.screen_bins.of_tile(tile)) {
-      const PreparedSphere<T>& sp = s_.spheres[e.sphere];
-      const double near = e.near;
-      const int ex0 = std::max<int>(e.x0, x0), ex1 = std::min<int>(e.x1, x1 - 1);
-      const int er0 = std::max<int>(e.r0, r0), er1 = std::min<int>(e.r1, r1 - 1);
-      for (int r = er0; r <= er1; ++r) {
-        PrimaryRay* ray = rays.data() + static_cast<size_t>(r - r0) * w + (ex0 - x0);
-        for (int x = ex0; x <= ex1; ++x, ++ray) {
-          Hit<T>& best = ray->hit;
-          if (!ray->dir || near > static_cast<double>(best.t)) continue;
-          const T t = sphere_t(s_.eye, *ray->dir, sp.centre, sp.radius, e.sphere, Origin{});
-          if (t > 0 && t <= t_max && (t < best.t || (t == best.t && e.sphere < best.object)))
-            best = {t, e.sphere};
-        }
-      }
-    }
-  }
-
-  // The world point of pixel (x, y) in pass `pass` (jittered when supersampling).
-  Vec3<T> pixel_point(int x, int y, int pass) const {
-    if (s_.spp <= 1) return screen_point(x, y, 0, 0);
-    PixelOffset o = sampler_.offset(s_.seed, x, y, pass);
-    return screen_point(x, y, o.u, o.v);
-  }
-
-  // The world point of pixel (x, y) displaced by (u, v) pixels (SPEC §3 camera mapping).
-  Vec3<T> screen_point(int x, int y, double u, double v) const {
-    auto fraction = [](int i, int count, double offset) {
-      if (count == 1) return T(0.5) + static_cast<T>(offset);
-      return (static_cast<T>(i) + static_cast<T>(offset)) / static_cast<T>(count - 1);
-    };
-    return {fraction(x, s_.width, u) * s_.world_width, fraction(y, s_.height, v) * s_.world_height,
-            T(0)};
-  }
-
   void copy_tile(int tile, const std::vector<std::uint8_t>& bytes) {
-    const auto [x0, x1, r0, r1] = bounds_of(tile);
-    const int w = x1 - x0, rows = r1 - r0;
+    const TileBounds b = grid_.bounds(tile);
+    const int w = b.width(), rows = b.rows();
     for (int r = 0; r < rows; ++r)
-      std::copy_n(bytes.data() + static_cast<size_t>(r) * w * 3, w * 3, image_.row(r0 + r) + x0 * 3);
+      std::copy_n(bytes.data() + static_cast<size_t>(r) * w * 3, w * 3, image_.row(b.r0 + r) + b.x0 * 3);
   }
 
   // Called under the lock by whoever finishes the last tile of a pass.
   void end_pass() {
     ++passes_done_;
-    if (passes_done_ >= 2) {
+    const bool estimate = passes_done_ >= 2 || (p_.samples_per_pass() > 1 && p_.spp() > 1);
+    if (estimate) {
       double total = 0;
       for (double e : tile_error_) total += e;  // tile order: deterministic
-      error_ = 255 * std::sqrt(total / (static_cast<double>(s_.width) * s_.height * 3));
+      error_ = 255 * std::sqrt(total / (static_cast<double>(p_.width()) * p_.height() * 3));
     }
     const Clock::time_point now = Clock::now();
     const double pass_ms = ms_between(pass_start_, now);
-    if (passes_done_ >= s_.spp) finish("spp");
+    if (passes_done_ >= passes_) finish("spp");
     else if (options_.target_error > 0 && passes_done_ >= 2 && error_ <= options_.target_error)
       finish("target_error");
     else if (options_.time_limit > 0 &&
@@ -258,15 +184,15 @@ class TiledRender final : public RenderJob {
     end_ = Clock::now();
   }
 
-  const PreparedScene<T> s_;
+  const Pipeline p_;
   const RenderOptions options_;
-  const StratifiedSampler sampler_;
-  const int tiles_x_;
-  const int tiles_y_;
+  const Film film_;
+  const TileGrid grid_;
+  const int passes_;
 
   mutable std::mutex mu_;
   Image image_;
-  std::vector<double> sum_, sum_sq_;  // per pixel channel, only with spp > 1
+  std::vector<double> sum_, sum_sq_;  // per pixel channel, only with several passes
   std::vector<double> tile_error_;    // per tile: summed squared standard errors, last pass
   int next_tile_ = 0;
   int done_in_pass_ = 0;
@@ -311,15 +237,35 @@ std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOpt
                std::to_string(limit) + (options.spp > 1 ? " with spp > 1" : "") + " can be rendered";
     return nullptr;
   }
+  for (const Texture& t : scene.textures)
+    if (!t.image) {
+      if (error)
+        *error = "texture '" + (t.name.empty() ? t.path : t.name) + "' ('" + t.path +
+                 "') was not provided: textures are read with the scene";
+      return nullptr;
+    }
   const Clock::time_point t0 = Clock::now();
-  if (options.precision == Precision::f32) {
-    auto prepared = prepare_scene<float>(scene, options, *camera);
-    return std::make_unique<TiledRender<float>>(std::move(prepared), options,
-                                                ms_between(t0, Clock::now()));
+  const Film film{options.effective_rounding(), options.profile == Profile::cpsc102};
+  if (options.profile == Profile::cpsc102) {
+    if (options.effective_max_depth() > cpsc102::kMaxRecursion) {
+      if (error)
+        *error = "the cpsc102 profile follows rays at most " +
+                 std::to_string(cpsc102::kMaxRecursion) + " bounces deep; max_depth " +
+                 std::to_string(options.effective_max_depth()) + " is more";
+      return nullptr;
+    }
+    cpsc102::ReferencePipeline pipeline(cpsc102::prepare_reference(scene, options, *camera));
+    return std::make_unique<TiledRender<cpsc102::ReferencePipeline>>(
+        std::move(pipeline), options, film, ms_between(t0, Clock::now()));
   }
-  auto prepared = prepare_scene<double>(scene, options, *camera);
-  return std::make_unique<TiledRender<double>>(std::move(prepared), options,
-                                               ms_between(t0, Clock::now()));
+  if (options.precision == Precision::f32) {
+    LecturePipeline<float> pipeline(prepare_scene<float>(scene, options, *camera));
+    return std::make_unique<TiledRender<LecturePipeline<float>>>(std::move(pipeline), options,
+                                                                 film, ms_between(t0, Clock::now()));
+  }
+  LecturePipeline<double> pipeline(prepare_scene<double>(scene, options, *camera));
+  return std::make_unique<TiledRender<LecturePipeline<double>>>(std::move(pipeline), options, film,
+                                                                ms_between(t0, Clock::now()));
 }
 
 Image render_image(const Scene& scene, const RenderOptions& options, int threads,

@@ -1,6 +1,7 @@
-// The classic Whitted tracer of the lecture (SPEC §3): closest hit, ambient over travelled
-// distance, diffuse and Phong/Blinn highlight over light distance, shadows, clamped mirror
-// reflection. Iterative, so deep recursion cannot overflow the stack.
+// The classic Whitted tracer of the lecture (the lecture profile): closest hit, ambient over
+// travelled distance, diffuse and Phong/Blinn highlight over light distance, shadows,
+// clamped mirror reflection, and light let through translucent objects. Iterative with an
+// explicit list of levels, so deep recursion cannot overflow the stack.
 #pragma once
 
 #include <algorithm>
@@ -11,14 +12,9 @@
 #include <vector>
 
 #include "render/prepared_scene.h"
+#include "render/ray_counts.h"
 
 namespace rayfarm {
-
-struct RayCounts {
-  std::uint64_t primary = 0;
-  std::uint64_t shadow = 0;
-  std::uint64_t reflection = 0;
-};
 
 template <class T>
 inline T clamp01(T x) {  // NaN maps to 0: no NaN can ever reach a pixel
@@ -29,14 +25,6 @@ template <class T>
 inline Vec3<T> clamp01(const Vec3<T>& c) {
   return {clamp01(c.x), clamp01(c.y), clamp01(c.z)};
 }
-
-// The object a secondary ray leaves from. Leaving a convex object's outside, the ray cannot
-// hit it again; leaving a sphere's inside, it can only hit the far side. This replaces the
-// usual epsilon offset, which fails at some scene scale.
-struct Origin {
-  int object = -1;  // spheres first, then planes; -1 for the eye
-  bool inside = false;
-};
 
 // Where a ray leaving `from` meets sphere `index`, or a value that is not > 0. The one
 // sphere test of both the loop and the hierarchy, so the two agree to the bit.
@@ -87,6 +75,12 @@ template <class T>
 struct Hit {
   T t = std::numeric_limits<T>::infinity();
   int object = -1;
+
+  // The one order of hits: nearer first; at equal t the lower object number (spheres, then
+  // planes, then the other shapes). Loops, hierarchies and screen bins all use it.
+  bool beaten_by(T t2, int object2) const {
+    return t2 < t || (t2 == t && object2 < object);
+  }
 };
 
 template <class T>
@@ -119,11 +113,12 @@ class Tracer {
     return trace(s_.eye, dir, &first);
   }
 
-  // The nearest hit with 0 < t <= t_max; of equal t, the lowest object index (spheres
-  // before planes). The hierarchy, when there is one, gives exactly the loop's answer.
+  // The nearest hit with 0 < t <= t_max, in the order of Hit::beaten_by. The hierarchies,
+  // when there are any, give exactly the loops' answer.
   Hit<T> closest(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max) const {
-    // Planes first: a sphere beyond the nearest plane cannot be the answer, so the plane's t
-    // bounds the sphere search (a sphere at exactly that t still wins: lower index).
+    // Planes and the other shapes first: a sphere beyond the nearest of them cannot be the
+    // answer, so its t bounds the sphere search (a sphere at exactly that t still wins:
+    // lower number).
     Hit<T> plane;
     closest_plane(o, d, from, t_max, plane);
     if (plane.object >= 0) t_max = plane.t;
@@ -134,8 +129,7 @@ class Tracer {
       bvh_closest(s_.bvh, ray, float_limit_up(t_max), [&](std::int32_t first, std::int32_t count) {
         for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp) {
           const T t = sphere_t(o, d, sp->centre, sp->radius, sp->index, from);
-          if (t > 0 && t <= t_max && (t < best.t || (t == best.t && sp->index < best.object)))
-            best = {t, sp->index};
+          if (t > 0 && t <= t_max && best.beaten_by(t, sp->index)) best = {t, sp->index};
         }
         return float_limit_up(best.t < t_max ? best.t : t_max);
       });
@@ -150,14 +144,16 @@ class Tracer {
     return best.object >= 0 ? best : plane;
   }
 
-  // Lets the nearest plane with 0 < t <= t_max take best's place if it is nearer.
+  // Lets the nearest plane or other shape with 0 < t <= t_max take best's place if it comes
+  // first.
   void closest_plane(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max,
                      Hit<T>& best) const {
-    const int ns = static_cast<int>(s_.spheres.size());
+    const int base = s_.plane_base();
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
-      const T t = plane_t(o, d, s_.planes[j], ns + j, from);
-      if (t > 0 && t <= t_max && t < best.t) best = {t, ns + j};
+      const T t = plane_t(o, d, s_.planes[j], base + j, from);
+      if (t > 0 && t <= t_max && t < best.t) best = {t, base + j};
     }
+    if (!s_.shapes.empty()) closest_shape(o, d, from, t_max, best);
   }
 
   // Whether anything lies at 0 < t < dist. Planes first: they are few and often block.
@@ -170,11 +166,13 @@ class Tracer {
     // The cell first: its entries load while the planes and the last blocker are tested.
     LightBuffer::Cell cell;
     const bool buffered = light && light->lookup(glm::dvec3(o), cell);
-    const int ns = static_cast<int>(s_.spheres.size());
+    const int base = s_.plane_base();
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
-      const T t = plane_t(o, d, s_.planes[j], ns + j, from);
+      const T t = plane_t(o, d, s_.planes[j], base + j, from);
       if (t > 0 && t < dist) return true;
     }
+    // Every kind is asked before "nothing in the way": the light buffer knows spheres only.
+    if (!s_.shapes.empty() && shape_blocks(o, d, from, dist)) return true;
     auto blocks = [&](int i) {
       const PreparedSphere<T>& sp = s_.spheres[i];
       const T t = sphere_t(o, d, sp.centre, sp.radius, i, from);
@@ -203,83 +201,260 @@ class Tracer {
             return false;
           });
     }
+    const int ns = static_cast<int>(s_.spheres.size());
     for (int i = 0; i < ns; ++i)
       if (blocks(i)) return true;
     return false;
   }
 
+  // How much of a light at distance `dist` along d reaches o: zero behind anything opaque,
+  // and filtered once by each translucent object on the way.
+  Vec3<T> transmittance(Vec3<T> o, const Vec3<T>& d, Origin from, T dist) const {
+    Vec3<T> through(1);
+    int crossed[8];
+    int n_crossed = 0;
+    for (int steps = 0; steps < 4 * kMaxCrossings; ++steps) {
+      const Hit<T> hit = closest(o, d, from, dist);
+      if (hit.object < 0 || !(hit.t < dist)) return through;
+      const PreparedMaterial<T>& m = s_.materials[material_of(hit.object)];
+      if (!(m.transparency > 0)) return Vec3<T>(0);
+      // An object is one filter, however many of its surfaces the ray crosses.
+      bool seen = false;
+      for (int i = 0; i < n_crossed; ++i) seen = seen || crossed[i] == hit.object;
+      if (!seen) {
+        through *= m.filter;
+        if (n_crossed < 8) crossed[n_crossed++] = hit.object;
+      }
+      const Vec3<T> p = o + hit.t * d;
+      from = {hit.object, glm::dot(outward_normal(hit.object, p), d) < 0};
+      o = p;
+      dist -= hit.t;
+    }
+    return Vec3<T>(0);  // more crossings than any real scene has: treat as opaque
+  }
+
  private:
+  static constexpr int kMaxCrossings = 64;
+
   static bool remember(int* last_blocker, int sphere) {
     if (last_blocker) *last_blocker = sphere;
     return true;
   }
 
+  void closest_shape(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max,
+                     Hit<T>& best) const {
+    const int base = s_.shape_base();
+    auto test = [&](int k) {
+      const T t = shape_t(s_.shapes[k], o, d, base + k, from);
+      if (t > 0 && t <= t_max && best.beaten_by(t, base + k)) best = {t, base + k};
+    };
+    BvhRay ray;
+    if (!s_.shape_bvh.empty() && ray.init(o, d, s_.shape_bvh.scale)) {
+      bvh_closest(s_.shape_bvh, ray, float_limit_up(std::min(t_max, best.t)),
+                  [&](std::int32_t first, std::int32_t count) {
+                    for (std::int32_t i = first; i < first + count; ++i) test(s_.shape_bvh.order[i]);
+                    return float_limit_up(best.t < t_max ? best.t : t_max);
+                  });
+      return;
+    }
+    for (int k = 0; k < static_cast<int>(s_.shapes.size()); ++k) test(k);
+  }
+
+  bool shape_blocks(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist) const {
+    const int base = s_.shape_base();
+    auto blocks = [&](int k) {
+      const T t = shape_t(s_.shapes[k], o, d, base + k, from);
+      return t > 0 && t < dist;
+    };
+    BvhRay ray;
+    if (!s_.shape_bvh.empty() && ray.init(o, d, s_.shape_bvh.scale))
+      return bvh_any(s_.shape_bvh, ray, float_limit_up(dist),
+                     [&](std::int32_t first, std::int32_t count) {
+                       for (std::int32_t i = first; i < first + count; ++i)
+                         if (blocks(s_.shape_bvh.order[i])) return true;
+                       return false;
+                     });
+    for (int k = 0; k < static_cast<int>(s_.shapes.size()); ++k)
+      if (blocks(k)) return true;
+    return false;
+  }
+
+  int material_of(int object) const {
+    const int ns = s_.plane_base(), np = static_cast<int>(s_.planes.size());
+    if (object < ns) return s_.spheres[object].material;
+    if (object < ns + np) return s_.planes[object - ns].material;
+    return s_.shapes[object - ns - np].material;
+  }
+
+  // The object's normal at p, pointing out of it (before it is turned towards the ray).
+  Vec3<T> outward_normal(int object, const Vec3<T>& p) const {
+    const int ns = s_.plane_base(), np = static_cast<int>(s_.planes.size());
+    if (object < ns) {
+      const Vec3<T> n = p - s_.spheres[object].centre;
+      const T len = glm::length(n);
+      return len > 0 ? n / len : Vec3<T>(0);
+    }
+    if (object < ns + np) return s_.planes[object - ns].normal;
+    return shape_normal(s_.shapes[object - ns - np], p);
+  }
+
+  // What shading needs of a hit: its facing normal, material and the colours there.
+  struct Surface {
+    Vec3<T> n;
+    bool inside;  // the ray arrived from the side the normal does not point to
+    const PreparedMaterial<T>* m;
+    Vec3<T> ambient, diffuse;
+  };
+
+  Surface surface(int object, const Vec3<T>& p, const Vec3<T>& dir) const {
+    Surface s;
+    const int ns = s_.plane_base(), np = static_cast<int>(s_.planes.size());
+    int material;
+    Vec3<T> texel(1);
+    const PreparedPlane<T>* tiles = nullptr;
+    if (object < ns) {
+      const PreparedSphere<T>& sp = s_.spheres[object];
+      s.n = p - sp.centre;
+      T nl = glm::length(s.n);
+      s.n = nl > 0 ? s.n / nl : -dir;
+      material = sp.material;
+    } else if (object < ns + np) {
+      const PreparedPlane<T>& pl = s_.planes[object - ns];
+      s.n = pl.normal;
+      material = pl.material;
+      if (pl.alt_material >= 0) tiles = &pl;
+    } else {
+      const PreparedShape<T>& sh = s_.shapes[object - ns - np];
+      s.n = shape_normal(sh, p);
+      material = sh.material;
+      texel = shape_texel(sh, p);
+    }
+    // Two-sided: the normal faces the incoming ray; from inside a sphere it points inward.
+    s.inside = glm::dot(s.n, dir) > 0;
+    if (s.inside) s.n = -s.n;
+    s.m = &s_.materials[material];
+    const PreparedMaterial<T>* colours = s.m;
+    if (tiles && !tile_is_odd(*tiles, p)) {
+      if (tiles->world_xz) {  // the 2009 form alternates the ambient colour only
+        s.ambient = s_.materials[tiles->alt_material].ambient;
+        s.diffuse = s.m->diffuse;
+        return s;
+      }
+      colours = &s_.materials[tiles->alt_material];
+    }
+    s.ambient = colours->ambient * texel;
+    s.diffuse = colours->diffuse * texel;
+    return s;
+  }
+
+  // The course's tile rule: odd squares have the plane's own material.
+  static bool tile_is_odd(const PreparedPlane<T>& pl, const Vec3<T>& p) {
+    T ix, iy;
+    if (pl.world_xz) {
+      ix = std::floor((p.x + 10000) / pl.tile_w);
+      iy = std::floor((p.z + 10000) / pl.tile_h);
+      return std::fmod(ix + iy, T(2)) != 0;  // 2009: even squares are the foreground
+    }
+    ix = std::floor(glm::dot(pl.u, p) / pl.tile_w);
+    iy = std::floor(glm::dot(pl.v, p) / pl.tile_h);
+    const T sum = std::fmod(ix + iy, T(2));
+    return sum == 1 || sum == -1;
+  }
+
   struct Level {
-    Vec3<T> local;
-    Vec3<T> weight;  // the material's specular: how much of the next level is added
+    Vec3<T> local;   // clamped
+    Vec3<T> weight;  // the material's specular: how much of the reflection is added
+    T keep = 1;      // 1 - transparency: how much of the local colour stays
+    Vec3<T> filter{0};
+    int reflected = -1;    // the level of the reflected ray's hit, if traced
+    int transmitted = -1;  // the level of the transmitted ray's hit, if traced
+    Vec3<T> value{0};
+  };
+
+  struct PendingRay {
+    Vec3<T> origin, dir;
+    Origin from;
+    T travelled, path_weight;
+    int depth;
+    int parent;  // the level whose transmitted ray this is
   };
 
   // `first`, when given, is the closest hit of the first ray.
   Vec3<T> trace(Vec3<T> origin, Vec3<T> dir, const Hit<T>* first) {
     levels_.clear();
-    Origin from;
-    T travelled = 0;
-    T path_weight = 1;
-    for (int depth = 0;; ++depth) {
+    pending_.clear();
+    follow(origin, dir, Origin{}, 0, 1, 0, -1, first);
+    while (!pending_.empty()) {
+      const PendingRay r = pending_.back();
+      pending_.pop_back();
+      follow(r.origin, r.dir, r.from, r.travelled, r.path_weight, r.depth, r.parent, nullptr);
+    }
+    // Children come after their parents: fold from the last level back.
+    for (size_t i = levels_.size(); i-- > 0;) {
+      Level& l = levels_[i];
+      Vec3<T> c = l.local;
+      if (l.transmitted >= 0) c = l.keep * c + l.filter * levels_[l.transmitted].value;
+      if (l.reflected >= 0) c = clamp01(c + l.weight * levels_[l.reflected].value);
+      l.value = c;
+    }
+    return levels_.front().value;
+  }
+
+  // Follows one ray and its chain of reflections, adding a level per hit; a translucent hit
+  // queues its transmitted ray.
+  void follow(Vec3<T> origin, Vec3<T> dir, Origin from, T travelled, T path_weight, int depth,
+              int parent, const Hit<T>* first) {
+    int previous = -1;
+    for (;; ++depth) {
+      const int index = static_cast<int>(levels_.size());
+      if (previous >= 0)
+        levels_[previous].reflected = index;
+      else if (parent >= 0)
+        levels_[parent].transmitted = index;
       Hit<T> hit =
-          depth == 0 && first ? *first : closest(origin, dir, from, s_.max_dist - travelled);
+          first && previous < 0 ? *first : closest(origin, dir, from, s_.max_dist - travelled);
       if (hit.object < 0) {
         levels_.push_back({s_.background, Vec3<T>(0)});
-        break;
+        return;
       }
       const T r_total = travelled + hit.t;
       const Vec3<T> p = origin + hit.t * dir;
-      Vec3<T> n;
-      int material;
-      const int ns = static_cast<int>(s_.spheres.size());
-      if (hit.object < ns) {
-        const PreparedSphere<T>& sp = s_.spheres[hit.object];
-        n = p - sp.centre;
-        T nl = glm::length(n);
-        n = nl > 0 ? n / nl : -dir;
-        material = sp.material;
-      } else {
-        const PreparedPlane<T>& pl = s_.planes[hit.object - ns];
-        n = pl.normal;
-        material = pl.material;
-      }
-      // Two-sided: the normal faces the incoming ray; from inside a sphere it points inward.
-      const bool inside = glm::dot(n, dir) > 0;
-      if (inside) n = -n;
-      const PreparedMaterial<T>& m = s_.materials[material];
+      const Surface sf = surface(hit.object, p, dir);
+      const PreparedMaterial<T>& m = *sf.m;
 
-      Vec3<T> colour = m.ambient / r_total;
-      if (s_.features.lights) add_direct_light(colour, p, n, dir, m, {hit.object, inside});
+      Vec3<T> colour = sf.ambient / r_total;
+      if (s_.features.lights)
+        add_direct_light(colour, p, sf, dir, {hit.object, sf.inside});
       colour = clamp01(colour);
+      levels_.push_back({colour, Vec3<T>(0)});
 
+      if (s_.features.transparency && m.transparency > 0 && depth < s_.max_depth) {
+        levels_[index].keep = 1 - m.transparency;
+        levels_[index].filter = m.filter;
+        // Straight on through the surface: into the object it was outside of, and out again.
+        pending_.push_back({p, dir, Origin{hit.object, !sf.inside}, r_total,
+                            path_weight * m.transparency, depth + 1, index});
+        ++counts.reflection;
+      }
       const bool reflect = s_.features.reflection && m.reflects && depth < s_.max_depth &&
                            !(path_weight * m.max_specular < s_.bailout);
-      if (!reflect) {
-        levels_.push_back({colour, Vec3<T>(0)});
-        break;
-      }
-      levels_.push_back({colour, m.specular});
+      if (!reflect) return;
+      levels_[index].weight = m.specular;
       path_weight *= m.max_specular;
-      dir = dir - (2 * glm::dot(n, dir)) * n;
+      dir = dir - (2 * glm::dot(sf.n, dir)) * sf.n;
       origin = p;
       travelled = r_total;
-      from = {hit.object, inside};
+      from = {hit.object, sf.inside};
+      previous = index;
       ++counts.reflection;
     }
-    Vec3<T> c = levels_.back().local;
-    for (size_t i = levels_.size() - 1; i-- > 0;)
-      c = clamp01(levels_[i].local + levels_[i].weight * c);
-    return c;
   }
 
   // Adds each light's term in scene order, as the formula reads.
-  void add_direct_light(Vec3<T>& colour, const Vec3<T>& p, const Vec3<T>& n, const Vec3<T>& dir,
-                        const PreparedMaterial<T>& m, Origin from) {
+  void add_direct_light(Vec3<T>& colour, const Vec3<T>& p, const Surface& sf, const Vec3<T>& dir,
+                        Origin from) {
+    const PreparedMaterial<T>& m = *sf.m;
+    const Vec3<T>& n = sf.n;
     const Vec3<T> v = -dir;
     const Vec3<T> ap = glm::abs(p);
     const T point_scale = std::max({ap.x, ap.y, ap.z});
@@ -301,7 +476,8 @@ class Tracer {
       // own plane): it would switch the light and its highlight on and off pixel by pixel.
       const T noise = 8 * std::numeric_limits<T>::epsilon() * (light.scale + point_scale) / r;
       if (!(n_dot_l > noise)) continue;
-      const Vec3<T> e = light.emissivity / r;
+      Vec3<T> e = light.emissivity / r;
+      if (light.kind != LightKind::point && !reaches(light, l, e)) continue;
       // A material lights cannot change gets exact zeros, unless E/r overflowed (then the
       // NaN it makes must appear exactly as in the general path).
       if (!m.lit && std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) continue;
@@ -309,9 +485,16 @@ class Tracer {
         ++counts.shadow;
         // A surface through the light itself (a light placed on an object) is not in the
         // way: hits within the rounding noise of the light's position do not block.
-        if (occluded(p, l, from, r - 4 * noise * r, last_blocker, light_buffer)) continue;
+        const T reach = r - 4 * noise * r;
+        if (s_.features.transparency) {
+          const Vec3<T> through = transmittance(p, l, from, reach);
+          if (through == Vec3<T>(0)) continue;
+          e *= through;
+        } else if (occluded(p, l, from, reach, last_blocker, light_buffer)) {
+          continue;
+        }
       }
-      Vec3<T> term = m.diffuse * n_dot_l;
+      Vec3<T> term = sf.diffuse * n_dot_l;
       if (s_.features.highlight && m.highlights) {
         T base;
         if (s_.blinn) {
@@ -328,8 +511,24 @@ class Tracer {
     }
   }
 
+  // Spotlights and projectors: whether the light leaves towards the point (-l) at all, and
+  // through which colour of a projector's slide.
+  static bool reaches(const PreparedLight<T>& light, const Vec3<T>& l, Vec3<T>& e) {
+    if (light.kind == LightKind::spot) return glm::dot(-l, light.direction) > light.cos_theta;
+    const PreparedShape<T>& slide = light.slide;
+    const auto t = plane_distance(light.location, -l, slide.normal, slide.point);
+    if (!t || !(*t > 0)) return false;
+    const Vec3<T> q = light.location - *t * l;
+    T qx, qy;
+    frame_coords(slide, q, qx, qy);
+    if (!(qx >= 0 && qx <= slide.width && qy >= 0 && qy <= slide.height)) return false;
+    e *= shape_texel(slide, q);
+    return true;
+  }
+
   const PreparedScene<T>& s_;
   std::vector<Level> levels_;
+  std::vector<PendingRay> pending_;
   std::vector<int> blockers_;  // per light: the sphere that blocked its last shadow ray
 };
 

@@ -1,63 +1,41 @@
-// From a parsed SceneDesc to a checked Scene: required attributes, value ranges, names,
-// material references and the camera rule (SPEC §1), reported for model and JSON alike.
+// From a parsed SceneDesc to a checked Scene: each kind builds itself from its checked
+// attributes (scene/entities/); here are the rules across entities: required attributes,
+// names, material and texture references, and the camera rule. Model and JSON alike.
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <map>
 #include <string_view>
 #include <vector>
 
+#include "scene/registry.h"
 #include "util/name_set.h"
-#include "rayfarm/scene.h"
-#include "rayfarm/schema.h"
 
 namespace rayfarm {
 namespace {
-
-std::string describe_entity(const EntityDesc& e) {
-  std::string s(entity_spec(e.kind).keyword);
-  if (!e.name.empty()) s += " '" + e.name + "'";
-  return s;
-}
 
 std::string position_text(const Where& w) {
   if (w.line > 0) return "line " + std::to_string(w.line);
   return w.path;
 }
 
-// The attributes of one entity by their place in its spec; like EntityDesc::find, the first
-// one written wins. Looked up once per entity instead of once per use.
-class AttrTable {
- public:
-  explicit AttrTable(const EntityDesc& e) : e_(e), spec_(entity_spec(e.kind)) {
-    if (spec_.attrs.size() > kSlots) return;  // never in the schema; fall back to find()
-    indexed_ = true;
-    for (const AttrDesc& a : e.attrs)
-      for (size_t k = 0; k < spec_.attrs.size(); ++k)
-        if (spec_.attrs[k].key == a.key) {
-          if (!slot_[k]) slot_[k] = &a;
-          break;
-        }
+// "did you mean" and the list of defined names, for a reference to an undefined one.
+std::string undefined_message(const std::string& what, const std::string& name,
+                              const std::string& in, const std::map<std::string, Where>& defined) {
+  std::vector<std::string_view> names;
+  std::string list;
+  for (auto& [n, where] : defined) {
+    names.push_back(n);
+    if (names.size() <= 12) list += (list.empty() ? "" : ", ") + n;
   }
+  if (names.size() > 12) list += ", ...";
+  std::string hint = nearest_word(name, names);
+  std::string msg = "undefined " + what + " '" + name + "' in " + in;
+  if (!hint.empty()) msg += " (did you mean '" + hint + "'?)";
+  msg += list.empty() ? "; no " + what + "s are defined" : "; defined: " + list;
+  return msg;
+}
 
-  const AttrDesc* find(std::string_view key) const {
-    if (!indexed_) return e_.find(key);
-    for (size_t k = 0; k < spec_.attrs.size(); ++k)
-      if (spec_.attrs[k].key == key) return slot_[k];
-    return nullptr;
-  }
-  const AttrDesc* at(size_t k) const { return indexed_ ? slot_[k] : e_.find(spec_.attrs[k].key); }
-
- private:
-  static constexpr size_t kSlots = 8;
-  const EntityDesc& e_;
-  const EntitySpec& spec_;
-  bool indexed_ = false;
-  const AttrDesc* slot_[kSlots] = {};
-};
-
-// Checked values of one attribute (at most 3 numbers).
-using Values = SmallVec<double, 3>;
+}  // namespace
 
 class SceneBuilder {
  public:
@@ -65,36 +43,26 @@ class SceneBuilder {
 
   std::optional<Scene> build(const SceneDesc& desc) {
     Scene scene;
-    size_t count[5] = {};
+    size_t count[kEntityKinds] = {};
     for (const EntityDesc& e : desc.entities) ++count[static_cast<int>(e.kind)];
-    scene.cameras.reserve(count[static_cast<int>(EntityKind::camera)]);
-    scene.materials.reserve(count[static_cast<int>(EntityKind::material)]);
-    scene.lights.reserve(count[static_cast<int>(EntityKind::light)]);
-    scene.spheres.reserve(count[static_cast<int>(EntityKind::sphere)]);
-    scene.planes.reserve(count[static_cast<int>(EntityKind::plane)]);
-    for (int k = 0; k < 5; ++k) name_sets_[k].reserve(count[k]);
-    // Materials first: a sphere may use a material defined after it.
+    for (int k = 0; k < kEntityKinds; ++k) name_sets_[k].reserve(count[k]);
+    size_t objects = 0;
+    for (int k = 0; k < kEntityKinds; ++k)
+      if (entity_spec(static_cast<EntityKind>(k)).role == EntityRole::object) objects += count[k];
+    scene.objects.reserve(objects);
+    // Materials and textures first: an object may use one defined after it.
     for (const EntityDesc& e : desc.entities)
       if (e.kind == EntityKind::material) add_material(e, scene);
+    for (const EntityDesc& e : desc.entities)
+      if (e.kind == EntityKind::texture) add_texture(e, scene);
     for (const EntityDesc& e : desc.entities) {
-      AttrTable attrs(e);
-      check_required(e, attrs);
-      switch (e.kind) {
-        case EntityKind::camera:
-          add_camera(e, attrs, scene);
-          break;
-        case EntityKind::material:
-          break;
-        case EntityKind::light:
-          add_light(e, attrs, scene);
-          break;
-        case EntityKind::sphere:
-          add_sphere(e, attrs, scene);
-          break;
-        case EntityKind::plane:
-          add_plane(e, attrs, scene);
-          break;
-      }
+      check_required(e);
+      if (e.kind == EntityKind::material || e.kind == EntityKind::texture) continue;
+      had_camera_ = had_camera_ || e.kind == EntityKind::camera;
+      check_name(e);
+      scene_ = &scene;
+      EntityReader reader(e, *this, diags_);
+      entity_hooks(e.kind).build(reader, scene);
     }
     if (scene.cameras.empty() && !had_camera_)
       diags_.error("no-camera", "no camera: a scene needs at least one camera", {});
@@ -106,7 +74,59 @@ class SceneBuilder {
     return scene;
   }
 
+  std::optional<int> material(const EntityDesc& e, const AttrDesc& a, const std::string& in) {
+    auto it = material_index_.find(a.word);
+    if (it != material_index_.end()) return it->second;
+    if (names_[static_cast<int>(EntityKind::material)].count(a.word))
+      return std::nullopt;  // defined but broken: reported
+    (void)e;
+    diags_.error("undefined-material",
+                 undefined_message("material", a.word, in,
+                                   names_[static_cast<int>(EntityKind::material)]),
+                 a.value_where.empty() ? a.where : a.value_where[0]);
+    return std::nullopt;
+  }
+
+  // A texture entity by name; otherwise the word is a path, one texture per distinct path.
+  std::optional<int> texture(const AttrDesc& a) {
+    if (auto it = texture_index_.find(a.word); it != texture_index_.end()) return it->second;
+    if (names_[static_cast<int>(EntityKind::texture)].count(a.word))
+      return std::nullopt;  // defined but broken: reported
+    const Where where = a.value_where.empty() ? a.where : a.value_where[0];
+    if (!is_valid_path(a.word)) {
+      diags_.error("bad-path", "'" + a.key + "' is neither a texture's name nor a file path",
+                   where);
+      return std::nullopt;
+    }
+    if (auto it = path_index_.find(a.word); it != path_index_.end()) return it->second;
+    const int index = static_cast<int>(scene_->textures.size());
+    scene_->textures.push_back({"", where, a.word, where, nullptr});
+    path_index_[a.word] = index;
+    return index;
+  }
+
  private:
+  void add_material(const EntityDesc& e, Scene& scene) {
+    check_name(e);
+    EntityReader reader(e, *this, diags_);
+    const size_t before = scene.materials.size();
+    entity_hooks(e.kind).build(reader, scene);
+    if (scene.materials.size() == before || material_index_.count(e.name)) return;
+    material_index_[e.name] = static_cast<int>(before);
+  }
+
+  void add_texture(const EntityDesc& e, Scene& scene) {
+    check_name(e);
+    EntityReader reader(e, *this, diags_);
+    auto path = reader.word("filename");
+    if (!path || texture_index_.count(e.name)) return;
+    const AttrDesc* a = e.find("filename");
+    texture_index_[e.name] = static_cast<int>(scene.textures.size());
+    scene.textures.push_back({e.name, e.where, *path, a->value_where.empty() ? a->where
+                                                                              : a->value_where[0],
+                              nullptr});
+  }
+
   // The scene's own "camera" option must name one of its cameras.
   void check_camera_option(const OptionSet& render) {
     const auto& cameras = names_[static_cast<int>(EntityKind::camera)];
@@ -128,27 +148,27 @@ class SceneBuilder {
     }
   }
 
-  void check_required(const EntityDesc& e, const AttrTable& attrs) {
+  void check_required(const EntityDesc& e) {
     const EntitySpec& spec = entity_spec(e.kind);
-    for (size_t k = 0; k < spec.attrs.size(); ++k) {
-      const AttrSpec& a = spec.attrs[k];
-      if (!a.required || attrs.at(k)) continue;
+    for (const AttrSpec& a : spec.attrs) {
+      if (!a.required || e.find(a.key)) continue;
       if (std::find(e.invalid_keys.begin(), e.invalid_keys.end(), a.key) != e.invalid_keys.end())
         continue;
       diags_.error("missing-attribute",
-                   describe_entity(e) + " is missing '" + std::string(a.key) + "' (" +
-                       std::string(describe(a.kind)) + ")",
+                   EntityReader::describe(e) + " is missing '" + std::string(a.key) + "' (" +
+                       describe(a) + ")",
                    e.where);
     }
   }
 
-  // Registers a name; reports a duplicate of the same entity type. Camera and material
-  // names are also kept sorted, for the lists in messages about them.
+  // Registers a name; reports a duplicate of the same entity type. Names that others refer
+  // to (cameras, materials, textures) are also kept sorted, for the lists in messages.
   void check_name(const EntityDesc& e) {
     if (e.name.empty()) return;
     const EntityDesc* const* seen = name_sets_[static_cast<int>(e.kind)].insert(e.name, &e);
     if (!seen) {
-      if (e.kind == EntityKind::camera || e.kind == EntityKind::material)
+      if (e.kind == EntityKind::camera || e.kind == EntityKind::material ||
+          e.kind == EntityKind::texture)
         names_[static_cast<int>(e.kind)].emplace(e.name, e.name_where);
       return;
     }
@@ -158,120 +178,105 @@ class SceneBuilder {
                  e.name_where);
   }
 
-  // Values of an attribute after the range check for its kind; empty when absent or bad.
-  Values values(const AttrTable& attrs, const EntityDesc& e, std::string_view key) {
-    const AttrDesc* a = attrs.find(key);
-    const AttrSpec* spec = find_attr(entity_spec(e.kind), key);
-    if (!a) {
-      if (!spec || spec->required) return {};
-      auto [lo, hi] = value_count(spec->kind);
-      (void)lo;
-      Values out;
-      for (int i = 0; i < hi; ++i) out.push_back(spec->fallback[i]);
-      return out;
-    }
-    bool ok = true;
-    auto fail = [&](size_t i, const std::string& what) {
-      Where w = i < a->value_where.size() ? a->value_where[i] : a->where;
-      diags_.error("out-of-range",
-                   "'" + a->key + "' " + what + ", got " + format_number(a->numbers[i]), w);
-      ok = false;
-    };
-    for (size_t i = 0; i < a->numbers.size(); ++i)
-      if (auto problem = value_problem(spec->kind, a->numbers[i]); !problem.empty())
-        fail(i, std::string(problem));
-    if (ok && spec->kind == ValueKind::direction && a->numbers.size() == 3 &&
-        is_zero_vector(a->numbers.data())) {
-      diags_.error("out-of-range", "'" + a->key + "' must not be the zero vector", a->where);
-      ok = false;
-    }
-    if (!ok) return {};
-    Values out = a->numbers;
-    if (spec->kind == ValueKind::colour && out.size() == 1) out.assign(3, out[0]);
-    return out;
-  }
-
-  static glm::dvec3 vec3(const Values& v) { return {v[0], v[1], v[2]}; }
-
-  void add_camera(const EntityDesc& e, const AttrTable& attrs, Scene& scene) {
-    had_camera_ = true;
-    check_name(e);
-    auto pix = values(attrs, e, "pixeldim");
-    auto win = values(attrs, e, "worlddim");
-    auto eye = values(attrs, e, "viewpoint");
-    if (pix.size() != 2 || win.size() != 2 || eye.size() != 3) return;
-    scene.cameras.push_back({e.name, e.where, static_cast<int>(pix[0]), static_cast<int>(pix[1]),
-                             win[0], win[1], vec3(eye)});
-  }
-
-  void add_material(const EntityDesc& e, Scene& scene) {
-    check_name(e);
-    AttrTable attrs(e);
-    auto ka = values(attrs, e, "ambient"), kd = values(attrs, e, "diffuse"),
-         ks = values(attrs, e, "specular");
-    auto n = values(attrs, e, "shininess");
-    if (ka.size() != 3 || kd.size() != 3 || ks.size() != 3 || n.size() != 1) return;
-    if (material_index_.count(e.name)) return;  // duplicate, reported
-    material_index_[e.name] = static_cast<int>(scene.materials.size());
-    scene.materials.push_back({e.name, e.where, vec3(ka), vec3(kd), vec3(ks), n[0]});
-  }
-
-  void add_light(const EntityDesc& e, const AttrTable& attrs, Scene& scene) {
-    check_name(e);
-    auto loc = values(attrs, e, "location"), em = values(attrs, e, "emissivity");
-    if (loc.size() != 3 || em.size() != 3) return;
-    scene.lights.push_back({e.name, e.where, vec3(loc), vec3(em)});
-  }
-
-  std::optional<int> material_of(const EntityDesc& e, const AttrTable& attrs) {
-    const AttrDesc* a = attrs.find("material");
-    if (!a) return std::nullopt;
-    auto it = material_index_.find(a->word);
-    if (it != material_index_.end()) return it->second;
-    if (material_names_defined(a->word)) return std::nullopt;  // defined but broken: reported
-    std::vector<std::string_view> names;
-    std::string list;
-    for (auto& [name, where] : names_[static_cast<int>(EntityKind::material)]) {
-      names.push_back(name);
-      if (names.size() <= 12) list += (list.empty() ? "" : ", ") + name;
-    }
-    if (names.size() > 12) list += ", ...";
-    std::string hint = nearest_word(a->word, names);
-    std::string msg = "undefined material '" + a->word + "' in " + describe_entity(e);
-    if (!hint.empty()) msg += " (did you mean '" + hint + "'?)";
-    msg += list.empty() ? "; no materials are defined" : "; defined: " + list;
-    diags_.error("undefined-material", msg, a->value_where.empty() ? a->where : a->value_where[0]);
-    return std::nullopt;
-  }
-
-  bool material_names_defined(const std::string& name) {
-    return names_[static_cast<int>(EntityKind::material)].count(name) > 0;
-  }
-
-  void add_sphere(const EntityDesc& e, const AttrTable& attrs, Scene& scene) {
-    check_name(e);
-    auto c = values(attrs, e, "center"), r = values(attrs, e, "radius");
-    auto m = material_of(e, attrs);
-    if (c.size() != 3 || r.size() != 1 || !m) return;
-    scene.spheres.push_back({e.name, e.where, vec3(c), r[0], *m});
-  }
-
-  void add_plane(const EntityDesc& e, const AttrTable& attrs, Scene& scene) {
-    check_name(e);
-    auto n = values(attrs, e, "normal"), p = values(attrs, e, "point");
-    auto m = material_of(e, attrs);
-    if (n.size() != 3 || p.size() != 3 || !m) return;
-    scene.planes.push_back({e.name, e.where, vec3(n), vec3(p), *m});
-  }
-
   Diagnostics& diags_;
-  NameSet<const EntityDesc*> name_sets_[5];  // the scene description outlives the builder
-  std::map<std::string, Where> names_[5];  // cameras and materials only
+  Scene* scene_ = nullptr;
+  NameSet<const EntityDesc*> name_sets_[kEntityKinds];  // the description outlives the builder
+  std::map<std::string, Where> names_[kEntityKinds];   // cameras, materials, textures only
   std::map<std::string, int> material_index_;
+  std::map<std::string, int> texture_index_;
+  std::map<std::string, int> path_index_;  // textures named by path alone
   bool had_camera_ = false;
 };
 
-}  // namespace
+// --- EntityReader ---------------------------------------------------------------------
+
+EntityReader::EntityReader(const EntityDesc& e, SceneBuilder& builder, Diagnostics& diags)
+    : e_(e), spec_(entity_spec(e.kind)), builder_(builder), diags_(diags) {}
+
+const AttrDesc* EntityReader::find(std::string_view key) const { return e_.find(key); }
+
+std::string EntityReader::describe(const EntityDesc& e) {
+  std::string s(entity_spec(e.kind).keyword);
+  if (!e.name.empty()) s += " '" + e.name + "'";
+  return s;
+}
+
+std::string EntityReader::describe() const { return describe(e_); }
+
+void EntityReader::error(std::string code, std::string message, const Where& where) {
+  diags_.error(std::move(code), std::move(message), where);
+}
+
+std::optional<SmallVec<double, 3>> EntityReader::numbers(std::string_view key) {
+  const AttrDesc* a = find(key);
+  const AttrSpec* spec = find_attr(spec_, key);
+  if (!spec) return std::nullopt;
+  if (!a) {
+    if (spec->required) return std::nullopt;
+    SmallVec<double, 3> out;
+    for (int i = 0; i < value_count(spec->kind)[1]; ++i) out.push_back(spec->fallback[i]);
+    return out;
+  }
+  bool ok = true;
+  for (size_t i = 0; i < a->numbers.size(); ++i)
+    if (auto problem = value_problem(*spec, a->numbers[i]); !problem.empty()) {
+      Where w = i < a->value_where.size() ? a->value_where[i] : a->where;
+      diags_.error("out-of-range",
+                   "'" + a->key + "' " + problem + ", got " + format_number(a->numbers[i]), w);
+      ok = false;
+    }
+  if (ok && spec->kind == ValueKind::direction && a->numbers.size() == 3 &&
+      is_zero_vector(a->numbers.data())) {
+    diags_.error("out-of-range", "'" + a->key + "' must not be the zero vector", a->where);
+    ok = false;
+  }
+  if (!ok) return std::nullopt;
+  SmallVec<double, 3> out = a->numbers;
+  if (spec->kind == ValueKind::colour && out.size() == 1) out.assign(3, out[0]);
+  return out;
+}
+
+std::optional<glm::dvec3> EntityReader::vec3(std::string_view key) {
+  auto v = numbers(key);
+  if (!v || v->size() != 3) return std::nullopt;
+  return glm::dvec3{(*v)[0], (*v)[1], (*v)[2]};
+}
+
+std::optional<std::array<double, 2>> EntityReader::pair(std::string_view key) {
+  auto v = numbers(key);
+  if (!v || v->size() != 2) return std::nullopt;
+  return std::array<double, 2>{(*v)[0], (*v)[1]};
+}
+
+std::optional<double> EntityReader::number(std::string_view key) {
+  auto v = numbers(key);
+  if (!v || v->size() != 1) return std::nullopt;
+  return (*v)[0];
+}
+
+std::optional<int> EntityReader::integer(std::string_view key) {
+  auto v = number(key);
+  if (!v) return std::nullopt;
+  return static_cast<int>(*v);
+}
+
+std::optional<std::string> EntityReader::word(std::string_view key) {
+  const AttrDesc* a = find(key);
+  if (!a) return std::nullopt;
+  return a->word;
+}
+
+std::optional<int> EntityReader::material(std::string_view key) {
+  const AttrDesc* a = find(key);
+  if (!a) return std::nullopt;
+  return builder_.material(e_, *a, describe());
+}
+
+std::optional<int> EntityReader::texture(std::string_view key) {
+  const AttrDesc* a = find(key);
+  if (!a) return std::nullopt;
+  return builder_.texture(*a);
+}
 
 std::optional<int> Scene::find_camera(std::string_view name) const {
   if (cameras.empty()) return std::nullopt;

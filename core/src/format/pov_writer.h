@@ -1,0 +1,34 @@
+// What each kind's POV-Ray export (scene/entities/*.cpp) shares: POV-Ray is left-handed, so
+// z is negated; numbers print in their shortest exact form; material i is texture M<i>.
+#pragma once
+
+#include <ostream>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "rayfarm/options.h"
+#include "rayfarm/scene.h"
+
+namespace rayfarm {
+
+struct PovWriter {
+  const Scene& scene;
+  const RenderOptions& options;
+  std::ostream& out;
+
+  static glm::dvec3 flip(glm::dvec3 v) { return {v.x, v.y, -v.z}; }
+  // A position or direction of the scene, in POV-Ray's space.
+  static std::string at(glm::dvec3 v) { return vec(flip(v)); }
+  // A colour or any triple as it is.
+  static std::string vec(glm::dvec3 v) {
+    v += 0.0;  // -0 prints as 0
+    return "<" + format_number(v.x) + ", " + format_number(v.y) + ", " + format_number(v.z) + ">";
+  }
+  static std::string num(double v) { return format_number(v); }
+  static std::string texture(int material) {
+    return "texture { M" + std::to_string(material) + " }";
+  }
+};
+
+}  // namespace rayfarm

@@ -1,0 +1,48 @@
+// The course's reference program as a tracer (the cpsc102 profile): its trace and
+// illumination as COURSE rules state them, every object in file order, its arithmetic
+// (x87.h), and its accidents: hits in front of the screen ignored, paths cut at max_dist,
+// and reflected rays whose glint looks from a hit point that later hit tests overwrote.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "render/cpsc102/reference_scene.h"
+#include "render/ray_counts.h"
+
+namespace rayfarm::cpsc102 {
+
+// The program recursed for every reflected and transmitted ray; so does this tracer, up to
+// this depth (a thread's stack holds it with room to spare).
+inline constexpr int kMaxRecursion = 1000;
+
+class ReferenceTracer {
+ public:
+  explicit ReferenceTracer(const RefScene& scene)
+      : s_(scene), stored_(scene.objects.size()) {}
+
+  // The colour of the primary ray through the screen point (wx, wy, 0), unclamped.
+  V3 primary(double wx, double wy);
+
+  RayCounts counts;
+
+ private:
+  static constexpr double kMiss = -1;
+
+  // One object's hit test: t > 0 when hit. Like the program's, it leaves behind in
+  // stored_[k] the point it computed, even for a hit it then rejects.
+  double test(int k, const V3& base, const V3& dir);
+  // The nearest object (file order breaks ties) with t > 0, skipping `skip` entirely.
+  int closest(const V3& base, const V3& dir, int skip, double& t);
+  V3 trace(const V3& base, int base_owner, const V3& dir, double total, int last, int depth);
+  V3 illuminate(int light, int object, const V3& p, const V3& n, int base_owner,
+                const V3& base, const V3& diffuse);
+  V3 normal_at(int k, const V3& p) const;
+  // The material colours at p: tiles and textures change ambient and diffuse.
+  void surface(int k, const V3& p, V3& ambient, V3& diffuse) const;
+
+  const RefScene& s_;
+  std::vector<V3> stored_;  // per object: the last point its hit test computed
+};
+
+}  // namespace rayfarm::cpsc102

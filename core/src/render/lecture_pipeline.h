@@ -1,0 +1,120 @@
+// The lecture profile's way of turning a tile of pixels into colours: its camera mapping
+// and stratified sampler, screen bins for primary rays where they were built, and the
+// Whitted tracer (tracer.h).
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "render/prepared_scene.h"
+#include "render/sampler.h"
+#include "render/tile_grid.h"
+#include "render/tracer.h"
+
+namespace rayfarm {
+
+template <class T>
+class LecturePipeline {
+ public:
+  explicit LecturePipeline(PreparedScene<T> scene)
+      : s_(std::move(scene)), sampler_(s_.spp) {}
+
+  int width() const { return s_.width; }
+  int height() const { return s_.height; }
+  int spp() const { return s_.spp; }
+  int samples_per_pass() const { return 1; }
+  std::vector<std::string> parts() const { return s_.features.parts(); }
+
+  // The colours of one pass (one sample per pixel) of a tile, rows top to bottom; false
+  // when canceled part way. The error of the pixel means is the caller's (one sample each).
+  template <class Canceled>
+  bool render_tile(const TileBounds& b, int pass, std::vector<glm::dvec3>& out,
+                   RayCounts& counts, double& /*error*/, Canceled&& canceled) const {
+    out.resize(static_cast<size_t>(b.width()) * b.rows());
+    Tracer<T> tracer(s_);
+    const bool binned = !s_.screen_bins.empty();
+    std::vector<PrimaryRay> rays;
+    if (binned) first_hits(b, pass, tracer, rays);
+    glm::dvec3* px = out.data();
+    for (int r = b.r0; r < b.r1; ++r) {
+      if (canceled()) return false;
+      const int y = s_.height - 1 - r;  // the top image row is world row H-1
+      for (int x = b.x0; x < b.x1; ++x) {
+        Vec3<T> c;
+        if (binned) {
+          const PrimaryRay& ray = rays[static_cast<size_t>(r - b.r0) * b.width() + (x - b.x0)];
+          c = ray.dir ? tracer.primary(*ray.dir, ray.hit) : tracer.primary(pixel_point(x, y, pass));
+        } else {
+          c = tracer.primary(pixel_point(x, y, pass));
+        }
+        *px++ = glm::dvec3(c);
+      }
+    }
+    counts = tracer.counts;
+    return true;
+  }
+
+ private:
+  struct PrimaryRay {
+    std::optional<Vec3<T>> dir;
+    Hit<T> hit;
+  };
+
+  // The closest hit of every primary ray of the tile, from its screen bin: each sphere is
+  // tested only on the pixels of its rectangle, nearest spheres first, and skipped on pixels
+  // where something nearer than all of it was already hit. Ties go by Hit::beaten_by, as in
+  // Tracer::closest, so the hits are the loop's.
+  void first_hits(const TileBounds& b, int pass, const Tracer<T>& tracer,
+                  std::vector<PrimaryRay>& rays) const {
+    const int w = b.width();
+    rays.resize(static_cast<size_t>(w) * b.rows());
+    const T t_max = s_.max_dist;
+    for (int r = b.r0; r < b.r1; ++r) {
+      for (int x = b.x0; x < b.x1; ++x) {
+        PrimaryRay& ray = rays[static_cast<size_t>(r - b.r0) * w + (x - b.x0)];
+        ray = {tracer.primary_direction(pixel_point(x, s_.height - 1 - r, pass)), Hit<T>{}};
+        // Planes and other shapes first, so spheres behind their hits are skipped.
+        if (ray.dir) tracer.closest_plane(s_.eye, *ray.dir, Origin{}, t_max, ray.hit);
+      }
+    }
+    const TileGrid grid(s_.width, s_.height);
+    const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
+    for (const ScreenBinEntry& e : s_.screen_bins.of_tile(tile)) {
+      const PreparedSphere<T>& sp = s_.spheres[e.sphere];
+      const double near = e.near;
+      const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
+      const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
+      for (int r = er0; r <= er1; ++r) {
+        PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
+        for (int x = ex0; x <= ex1; ++x, ++ray) {
+          Hit<T>& best = ray->hit;
+          if (!ray->dir || near > static_cast<double>(best.t)) continue;
+          const T t = sphere_t(s_.eye, *ray->dir, sp.centre, sp.radius, e.sphere, Origin{});
+          if (t > 0 && t <= t_max && best.beaten_by(t, e.sphere)) best = {t, e.sphere};
+        }
+      }
+    }
+  }
+
+  // The world point of pixel (x, y) in pass `pass` (jittered when supersampling).
+  Vec3<T> pixel_point(int x, int y, int pass) const {
+    if (s_.spp <= 1) return screen_point(x, y, 0, 0);
+    PixelOffset o = sampler_.offset(s_.seed, x, y, pass);
+    return screen_point(x, y, o.u, o.v);
+  }
+
+  // The world point of pixel (x, y) displaced by (u, v) pixels (the lecture's camera).
+  Vec3<T> screen_point(int x, int y, double u, double v) const {
+    auto fraction = [](int i, int count, double offset) {
+      if (count == 1) return T(0.5) + static_cast<T>(offset);
+      return (static_cast<T>(i) + static_cast<T>(offset)) / static_cast<T>(count - 1);
+    };
+    return {fraction(x, s_.width, u) * s_.world_width, fraction(y, s_.height, v) * s_.world_height,
+            T(0)};
+  }
+
+  PreparedScene<T> s_;
+  StratifiedSampler sampler_;
+};
+
+}  // namespace rayfarm

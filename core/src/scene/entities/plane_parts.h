@@ -1,0 +1,36 @@
+// The attribute groups the plane-like kinds share: the plane (normal, point) and its window
+// (xdir, dimensions).
+#pragma once
+
+#include <optional>
+
+#include <glm/geometric.hpp>
+
+#include "scene/registry.h"
+
+namespace rayfarm::entities {
+
+inline std::optional<Plane> read_plane(EntityReader& r) {
+  auto n = r.vec3("normal"), p = r.vec3("point");
+  if (!n || !p) return std::nullopt;
+  return Plane{*n, *p};
+}
+
+// xdir and a size under `size_key`; xdir must have a part in the plane, which is its x axis.
+inline std::optional<Window> read_window(EntityReader& r, const Plane& plane,
+                                         std::string_view size_key = "dimensions") {
+  auto xdir = r.vec3("xdir");
+  auto dims = r.pair(size_key);
+  if (!xdir || !dims) return std::nullopt;
+  const glm::dvec3 n = glm::normalize(plane.normal);
+  if (glm::length(*xdir - glm::dot(*xdir, n) * n) <= 1e-12 * glm::length(*xdir)) {
+    r.error("out-of-range",
+            "'xdir' must not be parallel to 'normal': its part in the plane is the x axis of " +
+                r.describe(),
+            r.find("xdir")->where);
+    return std::nullopt;
+  }
+  return Window{*xdir, (*dims)[0], (*dims)[1]};
+}
+
+}  // namespace rayfarm::entities
