@@ -30,7 +30,7 @@ std::string write_pov(const Scene& scene, const RenderOptions& options) {
   out << "// Exported by rayfarm. Render with:\n"
       << "//   povray +I<this file> +W" << w << " +H" << h << " -A +WT2 +O<out.png>\n"
       << "#version 3.7;\n"
-      << "global_settings { max_trace_level " << options.max_depth + 1
+      << "global_settings { max_trace_level " << options.effective_max_depth() + 1
       << " assumed_gamma 1.0 ambient_light rgb <1, 1, 1> }\n"
       << "background { color rgb " << vec({options.background[0], options.background[1],
                                           options.background[2]})

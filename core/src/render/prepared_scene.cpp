@@ -137,9 +137,9 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   p.world_height = narrow<T>(cam.world_height);
   // A miss is a displayable colour; clamping here keeps every sample in [0, 1].
   for (int c = 0; c < 3; ++c) p.background[c] = narrow<T>(std::clamp(options.background[c], 0.0, 1.0));
-  p.max_dist = narrow<T>(options.max_dist);
+  p.max_dist = narrow<T>(options.effective_max_dist());
   p.bailout = narrow<T>(options.bailout);
-  p.max_depth = options.max_depth;
+  p.max_depth = options.effective_max_depth();
   p.blinn = options.highlight == Highlight::blinn;
   p.spp = options.spp;
   p.seed = options.seed;
@@ -174,7 +174,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     f.lights = any_light && objects;
     f.shadows = options.shadows && f.lights;
     f.highlight = f.lights && reflective;
-    f.reflection = reflective && options.max_depth > 0;
+    f.reflection = reflective && p.max_depth > 0;
     // Without diffuse or highlight a light adds exact zeros (while E/r is finite, which the
     // tracer checks): it needs no shadow ray.
     for (size_t i = 0; i < p.materials.size(); ++i)
