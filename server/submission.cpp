@@ -106,7 +106,9 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   if (!loaded.scene) return {nullptr, scene_error(loaded.diags)};
   auto scene = std::make_shared<const Scene>(std::move(*loaded.scene));
 
+  // Precedence: the query, the scene's render block, the server's default profile.
   RenderOptions options;
+  options.profile = settings_.default_profile;
   Diagnostics diags;
   apply_options(options, scene->render, diags);
   OptionSet query;
