@@ -1,11 +1,11 @@
 // Render options: driven from the table itself, so an option added to it is covered here
 // without touching this file.
+#include "rayfarm/options.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
-
-#include "rayfarm/options.h"
 
 namespace rayfarm {
 namespace {
@@ -133,11 +133,11 @@ TEST(Options, EachProfileHasItsDefaults) {
 }
 
 TEST(Options, AnExplicitValueOverridesTheProfileInAnyOrder) {
-  RenderOptions before = with(with(with({}, "max_depth", "3"), "max_dist", "unlimited"),
-                              "rounding", "nearest");
+  RenderOptions before =
+      with(with(with({}, "max_depth", "3"), "max_dist", "unlimited"), "rounding", "nearest");
   before = with(before, "profile", "cpsc102");
-  RenderOptions after = with(with(with(cpsc102(), "max_depth", "3"), "max_dist", "inf"),
-                             "rounding", "nearest");
+  RenderOptions after =
+      with(with(with(cpsc102(), "max_depth", "3"), "max_dist", "inf"), "rounding", "nearest");
   for (const RenderOptions& o : {before, after}) {
     EXPECT_EQ(o.effective_max_depth(), 3);
     EXPECT_TRUE(std::isinf(o.effective_max_dist()));
@@ -150,15 +150,15 @@ TEST(Options, AnExplicitValueOverridesTheProfileInAnyOrder) {
 
 TEST(Options, AProfilesDefaultsGivenExplicitlyShareItsCacheKey) {
   RenderOptions spelled = cpsc102();
-  for (auto [name, value] : {std::pair{"rounding", "truncate"}, {"max_dist", "20"},
-                             {"max_depth", "64"}})
+  for (auto [name, value] :
+       {std::pair{"rounding", "truncate"}, {"max_dist", "20"}, {"max_depth", "64"}})
     spelled = with(spelled, name, value);
   EXPECT_EQ(canonical_string(spelled), canonical_string(cpsc102()));
   EXPECT_NE(canonical_string(cpsc102()), canonical_string({}));
   EXPECT_NE(canonical_string(cpsc102()).find("profile=cpsc102;"), std::string::npos);
 
-  RenderOptions lecture = with(with(with({}, "rounding", "nearest"), "max_dist", "unlimited"),
-                               "max_depth", "8");
+  RenderOptions lecture =
+      with(with(with({}, "rounding", "nearest"), "max_dist", "unlimited"), "max_depth", "8");
   EXPECT_EQ(canonical_string(lecture), canonical_string({}));
   EXPECT_NE(canonical_string({}).find("max_dist=unlimited;"), std::string::npos);
 }
