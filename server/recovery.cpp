@@ -30,11 +30,10 @@ void Service::restore() {
     job->error_code = r.value("error_code", "");
     job->width = r.value("width", 0);
     job->height = r.value("height", 0);
+    // Every option prints as text it reads back; the profile's defaults come back explicit.
     if (r.contains("options") && r["options"].is_object())
       for (auto& [k, v] : r["options"].items())
-        if (v.is_string() && !(k == "width" && v == "0") && !(k == "height" && v == "0") &&
-            !(k == "camera" && v == ""))
-          apply_option(job->options, k, v.get<std::string>());
+        if (v.is_string()) apply_option(job->options, k, v.get<std::string>());
     if (r.contains("stats") && r["stats"].is_object()) {
       const auto& st = r["stats"];
       job->stats.primary_rays = st.value("primary", 0ULL);

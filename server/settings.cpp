@@ -10,6 +10,12 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   Settings s;
   CLI::App app{"rayfarmd: the rayfarm render service"};
   std::string tokens;
+  std::string profile(to_string(s.default_profile));
+  // Read as the render option is, so the accepted names and the message come from its table.
+  auto as_profile = [](const std::string& v) {
+    RenderOptions o;
+    return apply_option(o, "profile", v).value_or("");
+  };
   auto add = [&](const std::string& flag, auto& value, const std::string& help) {
     std::string env = "RAYFARM_";
     for (char c : flag.substr(2)) env += c == '-' ? '_' : static_cast<char>(std::toupper(c));
@@ -34,6 +40,9 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   add("--results-dir", s.results_dir, "directory for results and queued jobs (survive restarts)");
   add("--cache-bytes", s.cache_bytes, "result bytes kept in memory");
   add("--token", tokens, "bearer token(s) required of clients, comma-separated");
+  add("--default-profile", profile, "profile of a request whose query and scene name none")
+      ->check(as_profile)
+      ->type_name(std::string(find_option("profile")->value_help));
   add("--http-threads", s.http_threads, "connection threads")->check(CLI::Range(4, 4096));
   add("--max-event-streams", s.max_event_streams, "open event streams at once")
       ->check(CLI::Range(0, 100000));
@@ -58,6 +67,9 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
     return std::nullopt;
   }
   s.access_log = !quiet;
+  RenderOptions resolved;
+  apply_option(resolved, "profile", profile);
+  s.default_profile = resolved.profile;
   size_t start = 0;
   while (start < tokens.size()) {
     size_t comma = tokens.find(',', start);

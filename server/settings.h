@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "rayfarm/options.h"
+
 namespace rayfarm::server {
 
 struct Settings {
@@ -24,6 +26,7 @@ struct Settings {
   std::string results_dir;   // empty: keep results in memory only
   std::uint64_t cache_bytes = 256ULL << 20;
   std::vector<std::string> tokens;  // accepted bearer tokens; empty: no authentication
+  Profile default_profile = Profile::lecture;  // of a request whose query and scene name none
 
   // Beyond the spec's list, for a shared lab.
   int http_threads = 64;

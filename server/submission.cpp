@@ -52,9 +52,9 @@ ApiError scene_error(const Diagnostics& diags) {
 }
 
 // The cache key: the scene as parsed (so layout and comments do not matter, and a model file
-// and its JSON twin share results) and every option that changes pixels.
-std::string content_key(const SceneDesc& desc, RenderOptions options) {
-  options.format = ImageFormat::png;
+// and its JSON twin share results) and every option that changes pixels (not the format: the
+// cache holds PNGs and converts).
+std::string content_key(const SceneDesc& desc, const RenderOptions& options) {
   return sha256_hex("render-version " + std::to_string(kRenderVersion) + "\n" + write_json(desc) +
                     "\n" + canonical_string(options))
       .substr(0, 40);
@@ -106,7 +106,9 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   if (!loaded.scene) return {nullptr, scene_error(loaded.diags)};
   auto scene = std::make_shared<const Scene>(std::move(*loaded.scene));
 
+  // Precedence: the query, the scene's render block, the server's default profile.
   RenderOptions options;
+  options.profile = settings_.default_profile;
   Diagnostics diags;
   apply_options(options, scene->render, diags);
   OptionSet query;
@@ -185,14 +187,15 @@ ApiError Service::check_limits(const Scene& scene, const RenderOptions& o, int w
   if (o.spp > s.max_spp)
     return limit_error("max_spp", "spp " + std::to_string(o.spp) + " is over the limit of " +
                                       std::to_string(s.max_spp));
-  if (o.max_depth > s.max_depth)
-    return limit_error("max_depth", "max_depth " + std::to_string(o.max_depth) +
+  const int depth = o.effective_max_depth();
+  if (depth > s.max_depth)
+    return limit_error("max_depth", "max_depth " + std::to_string(depth) +
                                         " is over the limit of " + std::to_string(s.max_depth));
   size_t objects = scene.objects.size();
   if (objects > static_cast<size_t>(s.max_objects))
     return limit_error("max_objects", "the scene has " + std::to_string(objects) +
                                           " objects; the limit is " + std::to_string(s.max_objects));
-  double work = static_cast<double>(pixels) * o.spp * (o.max_depth + 1);
+  double work = static_cast<double>(pixels) * o.spp * (depth + 1);
   if (work > s.max_work)
     return limit_error("max_work", "pixels x spp x (max_depth + 1) is " + format_number(work) +
                                        "; the limit is " + format_number(s.max_work));

@@ -934,6 +934,101 @@ TEST(ServerCache, ModelFileAndItsJsonTwinShareAnEntry) {
   EXPECT_EQ(json->body, model->body);
 }
 
+// ---- Profiles ----------------------------------------------------------------------------
+
+struct Rendered {
+  std::string cache, key, id, png;
+};
+
+Rendered render_waiting(httplib::Client& c, const std::string& q, const std::string& body = kScene,
+                        const std::string& type = "text/plain") {
+  auto r = c.Post(query("/render", "wait=1" + (q.empty() ? "" : "&" + q)), body, type);
+  EXPECT_TRUE(r);
+  if (!r) return {};
+  EXPECT_EQ(r->status, 200) << r->body;
+  return {r->get_header_value("X-Cache"), r->get_header_value("ETag"),
+          r->get_header_value("X-Job-Id"), r->body};
+}
+
+std::string scene_json_with(const std::string& render) {
+  std::string json = scene_json();
+  return json.substr(0, json.rfind('}')) + ", \"render\": " + render + "}";
+}
+
+// The server's default profile is the profile of a request whose query and scene name none;
+// the query wins over the scene's render block, which wins over the server. The key (the
+// ETag) follows the effective options, so it is the same on any server.
+TEST(ServerProfiles, DefaultProfileAppliesWhenNeitherRequestNorSceneNamesOne) {
+  Settings s = test_settings();
+  s.default_profile = Profile::cpsc102;
+  TestServer course(s);
+  TestServer lecture;
+  auto c = course.client();
+  auto l = lecture.client();
+
+  Rendered plain = render_waiting(*c, "");
+  EXPECT_EQ(plain.cache, "miss");
+  Json opts = status_of(*c, plain.id)["options"];
+  EXPECT_EQ(opts["profile"], "cpsc102");
+  EXPECT_EQ(opts["rounding"], "truncate");
+  EXPECT_EQ(opts["max_dist"], "20");
+  EXPECT_EQ(opts["max_depth"], "64");
+
+  // The lecture profile is another entry, here and on a lecture server.
+  Rendered lect = render_waiting(*c, "profile=lecture");
+  EXPECT_EQ(lect.cache, "miss");
+  EXPECT_NE(lect.key, plain.key);
+  opts = status_of(*c, lect.id)["options"];
+  EXPECT_EQ(opts["profile"], "lecture");
+  EXPECT_EQ(opts["rounding"], "nearest");
+  EXPECT_EQ(opts["max_dist"], "unlimited");
+  EXPECT_EQ(opts["max_depth"], "8");
+  EXPECT_NE(lect.png, plain.png);  // the floor beyond MAX_DIST 20
+  EXPECT_EQ(render_waiting(*l, "").key, lect.key);
+  EXPECT_EQ(render_waiting(*l, "profile=cpsc102").key, plain.key);
+
+  // The profile's defaults spelled out are the same request.
+  Rendered spelled =
+      render_waiting(*c, "profile=cpsc102&rounding=truncate&max_dist=20&max_depth=64");
+  EXPECT_EQ(spelled.cache, "hit");
+  EXPECT_EQ(spelled.key, plain.key);
+  EXPECT_EQ(spelled.png, plain.png);
+  EXPECT_EQ(render_waiting(*c, "").cache, "hit");
+
+  // The scene's render block over the server's default; the query over both.
+  Rendered from_scene =
+      render_waiting(*c, "", scene_json_with(R"({"profile": "lecture"})"), "application/json");
+  EXPECT_EQ(status_of(*c, from_scene.id)["options"]["profile"], "lecture");
+  EXPECT_EQ(from_scene.png, lect.png);
+  Rendered from_query = render_waiting(*c, "profile=cpsc102",
+                                       scene_json_with(R"({"profile": "lecture"})"),
+                                       "application/json");
+  EXPECT_EQ(status_of(*c, from_query.id)["options"]["profile"], "cpsc102");
+  EXPECT_EQ(from_query.png, plain.png);
+}
+
+TEST(ServerProfiles, DefaultProfileIsAFlagAndAnEnvironmentVariable) {
+  auto parse = [](std::vector<std::string> args, int& code) {
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    return parse_settings(static_cast<int>(argv.size()), argv.data(), code);
+  };
+  int code = 0;
+  auto s = parse({"rayfarmd"}, code);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->default_profile, Profile::lecture);
+  s = parse({"rayfarmd", "--default-profile", "cpsc102"}, code);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->default_profile, Profile::cpsc102);
+  ::setenv("RAYFARM_DEFAULT_PROFILE", "cpsc102", 1);
+  s = parse({"rayfarmd"}, code);
+  ::unsetenv("RAYFARM_DEFAULT_PROFILE");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->default_profile, Profile::cpsc102);
+  EXPECT_FALSE(parse({"rayfarmd", "--default-profile", "cpsc101"}, code));
+  EXPECT_EQ(code, 2);
+}
+
 // ---- Restarts ----------------------------------------------------------------------------
 
 struct TempDir {

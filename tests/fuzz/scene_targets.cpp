@@ -1,4 +1,5 @@
 // Fuzz targets for the scene front end.
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -46,7 +47,7 @@ void tiny_render(const Scene& scene) {
   o.width = 4;
   o.height = 3;
   o.spp = o.spp > 2 ? 2 : o.spp;
-  o.max_depth = o.max_depth > 3 ? 3 : o.max_depth;
+  o.max_depth = std::min(o.effective_max_depth(), 3);
   o.time_limit = 0;
   std::string error;
   Image img = render_image(scene, o, 1, nullptr, {}, nullptr, &error);

@@ -1,11 +1,10 @@
-// Render options (SPEC §4): one table of names, parsed the same way from the JSON "render"
-// object, HTTP query parameters and command-line flags.
+// Render options (SPEC §4): one table of descriptors, parsed the same way from the JSON
+// "render" object, HTTP query parameters and command-line flags, and printed from the same
+// table for job status, records and the cache key.
 #pragma once
 
 #include <array>
-#include <cmath>
 #include <cstdint>
-#include <limits>
 #include <optional>
 #include <span>
 #include <string>
@@ -19,13 +18,17 @@ namespace rayfarm {
 enum class Highlight { phong, blinn };
 enum class Precision { f64, f32 };
 enum class ImageFormat { png, ppm };
+// Shading conventions: the lecture notes', or the course's reference program's.
 enum class Profile { lecture, cpsc102 };
+// Colour to byte: floor(255c + 0.5), or (unsigned char)(255c).
 enum class Rounding { nearest, truncate };
 
 struct RenderOptions {
   int spp = 1;
-  int max_depth = 8;
-  double max_dist = std::numeric_limits<double>::infinity();
+  // nullopt: the profile's default (lecture: 8, unlimited, nearest; cpsc102: 64, 20, truncate).
+  // Read them through the effective_ accessors.
+  std::optional<int> max_depth;
+  std::optional<double> max_dist;
   bool shadows = true;
   Highlight highlight = Highlight::phong;
   double bailout = 0;
@@ -36,25 +39,30 @@ struct RenderOptions {
   std::string camera;  // empty: the first camera
   std::uint64_t seed = 0;
   ImageFormat format = ImageFormat::png;
+  Profile profile = Profile::lecture;
+  std::optional<Rounding> rounding;
   double target_error = 0;  // stop sampling once the error estimate (8-bit levels) is below; 0 = off
   double time_limit = 0;    // seconds; stop sampling when out of time; 0 = off
   bool specialize = true;   // run only the pipeline parts the scene needs (off: for testing)
-  Profile profile = Profile::lecture;
-  std::optional<Rounding> rounding;
 
-  Rounding effective_rounding() const {
-    return rounding ? *rounding : profile == Profile::cpsc102 ? Rounding::truncate : Rounding::nearest;
-  }
-  double effective_max_dist() const { return profile == Profile::cpsc102 && std::isinf(max_dist) ? 20.0 : max_dist; }
-  int effective_max_depth() const { return profile == Profile::cpsc102 ? 64 : max_depth; }
+  int effective_max_depth() const;
+  double effective_max_dist() const;
+  Rounding effective_rounding() const;
 
   bool operator==(const RenderOptions&) const = default;
 };
 
+// One option: how it reads, prints and whether it can change a pixel.
 struct OptionSpec {
   std::string_view name;
   std::string_view value_help;  // e.g. "1..N"
   std::string_view help;
+  // Sets the option from text; an error message (naming the accepted values) on failure.
+  std::optional<std::string> (*parse)(RenderOptions&, std::string_view value);
+  // The effective value, as text `parse` reads back.
+  std::string (*print)(const RenderOptions&);
+  bool affects_pixels;       // part of the cache key
+  std::string_view example;  // a valid value that is not the default (tests set each option)
 };
 
 std::span<const OptionSpec> option_specs();
@@ -77,13 +85,16 @@ std::optional<std::string> apply_option(RenderOptions& options, std::string_view
 void apply_options(RenderOptions& options, const OptionSet& set, Diagnostics& diags);
 
 // The options that change the rendered pixels, as a stable string (cache keys, reports).
+// Effective values: a profile's default and the same value given explicitly share a key.
 std::string canonical_string(const RenderOptions& options);
-// All options as `name=value` pairs in table order (JSON status, summaries).
+// All options as `name=value` pairs in table order, effective values (JSON status, records).
 std::vector<std::pair<std::string, std::string>> option_pairs(const RenderOptions& options);
 
 std::string_view to_string(Precision p);
 std::string_view to_string(Highlight h);
 std::string_view to_string(ImageFormat f);
+std::string_view to_string(Profile p);
+std::string_view to_string(Rounding r);
 std::string format_number(double v);  // shortest text that reads back to the same double
 
 }  // namespace rayfarm

@@ -27,7 +27,8 @@ double median(std::vector<double> v) {
 
 std::string setting_label(const ReportRow& r) {
   const RenderOptions& o = r.options;
-  std::string s = "spp " + std::to_string(o.spp) + ", depth " + std::to_string(o.max_depth);
+  std::string s =
+      "spp " + std::to_string(o.spp) + ", depth " + std::to_string(o.effective_max_depth());
   if (o.bailout > 0) s += ", bailout " + format_number(o.bailout);
   s += ", " + std::string(to_string(o.precision));
   return s;
@@ -80,7 +81,7 @@ Report run_report(const Scene& scene, const std::string& scene_name, const Rende
       sweeps.push_back("spp");
     }
   for (int d : settings.depths) {
-    if (d == base.max_depth) continue;  // already in the spp sweep
+    if (d == base.effective_max_depth()) continue;  // already in the spp sweep
     RenderOptions o = sized;
     o.max_depth = d;
     o.spp = 16;
@@ -104,7 +105,7 @@ Report run_report(const Scene& scene, const std::string& scene_name, const Rende
 
   report.reference = sized;
   report.reference.spp = settings.reference_spp;
-  report.reference.max_depth = std::max(settings.reference_depth, base.max_depth);
+  report.reference.max_depth = std::max(settings.reference_depth, base.effective_max_depth());
   report.reference.bailout = 0;
   report.reference.precision = Precision::f64;
   step("reference (spp " + std::to_string(report.reference.spp) + ")");
@@ -159,9 +160,9 @@ std::string report_markdown(const Report& r) {
   std::ostringstream o;
   o << "# Error against run time: " << r.scene_name << "\n\n"
     << "Rendered at " << r.width << "x" << r.height << ". Reference: spp " << r.reference.spp
-    << ", max_depth " << r.reference.max_depth << ", double (" << fixed(r.reference_ms, 0)
-    << " ms). Times are medians of " << (r.rows.empty() ? 0 : r.rows[0].times_ms.size())
-    << " runs; errors are in 8-bit levels against the reference. **Bold** settings: no other "
+    << ", max_depth " << r.reference.effective_max_depth() << ", double ("
+    << fixed(r.reference_ms, 0) << " ms). Times are medians of "
+    << (r.rows.empty() ? 0 : r.rows[0].times_ms.size()) << " runs; errors are in 8-bit levels against the reference. **Bold** settings: no other "
        "setting is both at least as fast and at least as accurate.\n\n"
     << "| sweep | spp | max_depth | bailout | precision | time ms | RMSE | PSNR dB | max | "
        "pixels off > 1 |\n|---|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
@@ -169,7 +170,7 @@ std::string report_markdown(const Report& r) {
     const RenderOptions& x = row.options;
     std::string b = row.pareto ? "**" : "";
     double total = static_cast<double>(row.error.width) * row.error.height;
-    o << "| " << row.sweep << " | " << b << x.spp << b << " | " << x.max_depth << " | "
+    o << "| " << row.sweep << " | " << b << x.spp << b << " | " << x.effective_max_depth() << " | "
       << format_number(x.bailout) << " | " << to_string(x.precision) << " | " << b
       << fixed(row.time_ms, 1) << b << " | " << b << fixed(row.error.rmse, 3) << b << " | "
       << fixed(row.error.psnr, 1) << " | " << row.error.max_abs << " | "
@@ -197,8 +198,8 @@ std::string report_csv(const Report& r) {
        "off_by_more_than_1,pareto\n";
   for (const ReportRow& row : r.rows) {
     const RenderOptions& x = row.options;
-    o << row.sweep << "," << x.spp << "," << x.max_depth << "," << format_number(x.bailout)
-      << "," << to_string(x.precision) << "," << fixed(row.time_ms, 3) << ","
+    o << row.sweep << "," << x.spp << "," << x.effective_max_depth() << ","
+      << format_number(x.bailout) << "," << to_string(x.precision) << "," << fixed(row.time_ms, 3) << ","
       << fixed(row.error.rmse, 6) << "," << fixed(row.error.psnr, 3) << "," << row.error.max_abs
       << "," << fixed(row.error.mean_abs, 6) << "," << row.error.off_by_more_than_1 << ","
       << (row.pareto ? 1 : 0) << "\n";

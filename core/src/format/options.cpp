@@ -1,11 +1,13 @@
-// Render options: the table, parsing of `name=value` text, canonical forms.
+// Render options: one table of descriptors (name, help, parse, print, whether it changes
+// pixels) that parsing, printing, the CLI flags and the cache key all read.
 #include "rayfarm/options.h"
 
 #include <charconv>
 #include <cmath>
-#include <cstring>
+#include <limits>
 
 #include "rayfarm/model_parser.h"
+#include "util/enum_table.h"
 
 namespace rayfarm {
 namespace {
@@ -13,26 +15,31 @@ namespace {
 constexpr int kMaxSpp = 1 << 20;
 constexpr int kMaxDepthLimit = 100000;
 constexpr int kMaxSide = 65535;
+constexpr double kUnlimited = std::numeric_limits<double>::infinity();
 
-constexpr OptionSpec kOptions[] = {
-    {"spp", "1..N", "samples per pixel (stratified jitter; 1 = the exact pixel point)"},
-    {"max_depth", "0..N", "reflection bounces"},
-    {"max_dist", ">0", "path-length cap (the lecture's MAX_DIST); default unlimited"},
-    {"shadows", "true|false", "cast shadow rays"},
-    {"highlight", "phong|blinn", "specular highlight model"},
-    {"bailout", ">=0", "skip a reflection whose weight is below this"},
-    {"precision", "double|float", "arithmetic of the tracer"},
-    {"background", "R,G,B", "colour of rays that hit nothing (one number: grey)"},
-    {"width", "1..65535", "image width (same world window)"},
-    {"height", "1..65535", "image height (same world window)"},
-    {"camera", "NAME", "which camera (default: the first)"},
-    {"seed", "0..2^64-1", "jitter stream seed"},
-    {"format", "png|ppm", "output encoding"},
-    {"target_error", ">=0", "stop sampling once the error estimate (8-bit levels) is below"},
-    {"time_limit", ">=0", "seconds; stop sampling when out of time"},
-    {"specialize", "true|false", "run only the pipeline parts the scene needs (false: testing)"},
-    {"profile", "lecture|cpsc102", "TEMPORARY"},
+constexpr EnumTable<Highlight, 2> kHighlights({{"phong", Highlight::phong},
+                                               {"blinn", Highlight::blinn}});
+constexpr EnumTable<Precision, 2> kPrecisions({{"double", Precision::f64},
+                                               {"float", Precision::f32}});
+constexpr EnumTable<ImageFormat, 2> kFormats({{"png", ImageFormat::png},
+                                              {"ppm", ImageFormat::ppm}});
+constexpr EnumTable<Profile, 2> kProfiles({{"lecture", Profile::lecture},
+                                           {"cpsc102", Profile::cpsc102}});
+constexpr EnumTable<Rounding, 2> kRoundings({{"nearest", Rounding::nearest},
+                                             {"truncate", Rounding::truncate}});
+
+// What each profile means for the options a request leaves unset: the lecture's conventions,
+// or the course program's MAX_DIST 20, 64 bounces and truncated bytes.
+struct ProfileDefaults {
+  int max_depth;
+  double max_dist;
+  Rounding rounding;
 };
+
+constexpr ProfileDefaults defaults_of(Profile p) {
+  return p == Profile::cpsc102 ? ProfileDefaults{64, 20, Rounding::truncate}
+                               : ProfileDefaults{8, kUnlimited, Rounding::nearest};
+}
 
 // A value as echoed in a message, shortened.
 std::string shown(std::string_view v) {
@@ -48,13 +55,9 @@ std::optional<long long> parse_integer(std::string_view v) {
   return out;
 }
 
-std::optional<bool> parse_bool(std::string_view v) {
-  if (v == "true" || v == "1" || v == "yes" || v == "on") return true;
-  if (v == "false" || v == "0" || v == "no" || v == "off") return false;
-  return std::nullopt;
-}
-
-std::optional<std::string> int_in(std::string_view v, long long lo, long long hi, int& out) {
+// `Out` is the field: a plain value, or an optional whose nullopt means "the profile's".
+template <class Out>
+std::optional<std::string> int_in(std::string_view v, long long lo, long long hi, Out& out) {
   auto n = parse_integer(v);
   if (!n || *n < lo || *n > hi)
     return "must be an integer in " + std::to_string(lo) + ".." + std::to_string(hi) + ", got '" +
@@ -63,8 +66,8 @@ std::optional<std::string> int_in(std::string_view v, long long lo, long long hi
   return std::nullopt;
 }
 
-std::optional<std::string> number_at_least(std::string_view v, double lo, bool strict,
-                                           double& out) {
+template <class Out>
+std::optional<std::string> number_at_least(std::string_view v, double lo, bool strict, Out& out) {
   std::string why;
   auto n = parse_number(v, &why);
   if (!n) return "'" + shown(v) + "' is not a number (" + why + ")";
@@ -75,7 +78,150 @@ std::optional<std::string> number_at_least(std::string_view v, double lo, bool s
   return std::nullopt;
 }
 
+std::optional<std::string> bool_in(std::string_view v, bool& out) {
+  if (v == "true" || v == "1" || v == "yes" || v == "on")
+    out = true;
+  else if (v == "false" || v == "0" || v == "no" || v == "off")
+    out = false;
+  else
+    return "must be true or false, got '" + shown(v) + "'";
+  return std::nullopt;
+}
+
+template <class T, size_t N, class Out>
+std::optional<std::string> enum_in(const EnumTable<T, N>& table, std::string_view v, Out& out) {
+  auto e = table.parse(v);
+  if (!e) return "must be " + table.accepted() + ", got '" + shown(v) + "'";
+  out = *e;
+  return std::nullopt;
+}
+
+std::optional<std::string> seed_in(std::string_view v, std::uint64_t& out) {
+  auto [ptr, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
+  if (ec != std::errc() || ptr != v.data() + v.size() || v.empty())
+    return "must be an integer in 0..18446744073709551615, got '" + shown(v) + "'";
+  return std::nullopt;
+}
+
+// "r,g,b", "r g b" or one grey value.
+std::optional<std::string> colour_in(std::string_view v, std::array<double, 3>& out) {
+  std::vector<double> parts;
+  size_t i = 0;
+  while (i < v.size() && parts.size() <= 3) {
+    while (i < v.size() && (v[i] == ',' || v[i] == ' ')) ++i;
+    size_t j = i;
+    while (j < v.size() && v[j] != ',' && v[j] != ' ') ++j;
+    if (j > i) {
+      double c = 0;
+      if (auto err = number_at_least(v.substr(i, j - i), 0, false, c)) return err;
+      parts.push_back(c);
+    }
+    i = j;
+  }
+  if (parts.size() == 1) parts.assign(3, parts[0]);
+  if (parts.size() != 3) return "must be 3 numbers >= 0 (R,G,B) or one grey value";
+  out = {parts[0], parts[1], parts[2]};
+  return std::nullopt;
+}
+
+std::string bool_text(bool b) { return b ? "true" : "false"; }
+
+using Opts = RenderOptions;
+using Text = std::string_view;
+
+constexpr OptionSpec kOptions[] = {
+    {"spp", "1..N", "samples per pixel (stratified jitter; 1 = the exact pixel point)",
+     [](Opts& o, Text v) { return int_in(v, 1, kMaxSpp, o.spp); },
+     [](const Opts& o) { return std::to_string(o.spp); }, true, "4"},
+    {"max_depth", "0..N", "reflection bounces (default: the profile's)",
+     [](Opts& o, Text v) { return int_in(v, 0, kMaxDepthLimit, o.max_depth); },
+     [](const Opts& o) { return std::to_string(o.effective_max_depth()); }, true, "3"},
+    {"max_dist", ">0|unlimited", "path-length cap (the lecture's MAX_DIST; default: the profile's)",
+     [](Opts& o, Text v) -> std::optional<std::string> {
+       if (v == "inf" || v == "unlimited") {
+         o.max_dist = kUnlimited;
+         return std::nullopt;
+       }
+       return number_at_least(v, 0, true, o.max_dist);
+     },
+     [](const Opts& o) {
+       double d = o.effective_max_dist();
+       return std::isinf(d) ? std::string("unlimited") : format_number(d);
+     },
+     true, "12.5"},
+    {"shadows", "true|false", "cast shadow rays",
+     [](Opts& o, Text v) { return bool_in(v, o.shadows); },
+     [](const Opts& o) { return bool_text(o.shadows); }, true, "false"},
+    {"highlight", kHighlights.value_help(), "specular highlight model",
+     [](Opts& o, Text v) { return enum_in(kHighlights, v, o.highlight); },
+     [](const Opts& o) { return std::string(to_string(o.highlight)); }, true, "blinn"},
+    {"bailout", ">=0", "skip a reflection whose weight is below this",
+     [](Opts& o, Text v) { return number_at_least(v, 0, false, o.bailout); },
+     [](const Opts& o) { return format_number(o.bailout); }, true, "0.01"},
+    {"precision", kPrecisions.value_help(), "arithmetic of the tracer",
+     [](Opts& o, Text v) { return enum_in(kPrecisions, v, o.precision); },
+     [](const Opts& o) { return std::string(to_string(o.precision)); }, true, "float"},
+    {"background", "R,G,B", "colour of rays that hit nothing (one number: grey)",
+     [](Opts& o, Text v) { return colour_in(v, o.background); },
+     [](const Opts& o) {
+       const auto& c = o.background;
+       return format_number(c[0]) + "," + format_number(c[1]) + "," + format_number(c[2]);
+     },
+     true, "0.5"},
+    // 0 (and an empty camera) is what the defaults print, so a job record reads back.
+    {"width", "0..65535", "image width (same world window; 0: the camera's pixeldim)",
+     [](Opts& o, Text v) { return int_in(v, 0, kMaxSide, o.width); },
+     [](const Opts& o) { return std::to_string(o.width); }, true, "7"},
+    {"height", "0..65535", "image height (same world window; 0: the camera's pixeldim)",
+     [](Opts& o, Text v) { return int_in(v, 0, kMaxSide, o.height); },
+     [](const Opts& o) { return std::to_string(o.height); }, true, "5"},
+    {"camera", "NAME", "which camera (default: the first)",
+     [](Opts& o, Text v) -> std::optional<std::string> {
+       if (v.size() > 256) return "must be a camera name";
+       o.camera = std::string(v);
+       return std::nullopt;
+     },
+     [](const Opts& o) { return o.camera; }, true, "side"},
+    {"seed", "0..2^64-1", "jitter stream seed", [](Opts& o, Text v) { return seed_in(v, o.seed); },
+     [](const Opts& o) { return std::to_string(o.seed); }, true, "7"},
+    // The same pixels in another encoding.
+    {"format", kFormats.value_help(), "output encoding",
+     [](Opts& o, Text v) { return enum_in(kFormats, v, o.format); },
+     [](const Opts& o) { return std::string(to_string(o.format)); }, false, "ppm"},
+    {"profile", kProfiles.value_help(),
+     "shading conventions: the lecture notes', or the course's reference program's",
+     [](Opts& o, Text v) { return enum_in(kProfiles, v, o.profile); },
+     [](const Opts& o) { return std::string(to_string(o.profile)); }, true, "cpsc102"},
+    {"rounding", kRoundings.value_help(), "colour to byte (default: the profile's)",
+     [](Opts& o, Text v) { return enum_in(kRoundings, v, o.rounding); },
+     [](const Opts& o) { return std::string(to_string(o.effective_rounding())); }, true,
+     "truncate"},
+    // Both stop sampling early, so both change the pixels. A stop on the error estimate is
+    // deterministic and cached; a time limit's depends on the machine, and the server does
+    // not cache those, but the key still keeps them apart from full renders.
+    {"target_error", ">=0", "stop sampling once the error estimate (8-bit levels) is below",
+     [](Opts& o, Text v) { return number_at_least(v, 0, false, o.target_error); },
+     [](const Opts& o) { return format_number(o.target_error); }, true, "0.5"},
+    {"time_limit", ">=0", "seconds; stop sampling when out of time",
+     [](Opts& o, Text v) { return number_at_least(v, 0, false, o.time_limit); },
+     [](const Opts& o) { return format_number(o.time_limit); }, true, "2"},
+    // Specialization never changes a byte (tests compare both paths).
+    {"specialize", "true|false", "run only the pipeline parts the scene needs (false: testing)",
+     [](Opts& o, Text v) { return bool_in(v, o.specialize); },
+     [](const Opts& o) { return bool_text(o.specialize); }, false, "false"},
+};
+
 }  // namespace
+
+int RenderOptions::effective_max_depth() const {
+  return max_depth.value_or(defaults_of(profile).max_depth);
+}
+double RenderOptions::effective_max_dist() const {
+  return max_dist.value_or(defaults_of(profile).max_dist);
+}
+Rounding RenderOptions::effective_rounding() const {
+  return rounding.value_or(defaults_of(profile).rounding);
+}
 
 std::span<const OptionSpec> option_specs() { return kOptions; }
 
@@ -85,95 +231,11 @@ const OptionSpec* find_option(std::string_view name) {
   return nullptr;
 }
 
-std::optional<std::string> apply_option(RenderOptions& o, std::string_view name,
+std::optional<std::string> apply_option(RenderOptions& options, std::string_view name,
                                         std::string_view value) {
-  if (name == "spp") return int_in(value, 1, kMaxSpp, o.spp);
-  if (name == "max_depth") return int_in(value, 0, kMaxDepthLimit, o.max_depth);
-  if (name == "width") return int_in(value, 1, kMaxSide, o.width);
-  if (name == "height") return int_in(value, 1, kMaxSide, o.height);
-  if (name == "max_dist") {
-    if (value == "inf" || value == "unlimited") {
-      o.max_dist = std::numeric_limits<double>::infinity();
-      return std::nullopt;
-    }
-    return number_at_least(value, 0, true, o.max_dist);
-  }
-  if (name == "bailout") return number_at_least(value, 0, false, o.bailout);
-  if (name == "target_error") return number_at_least(value, 0, false, o.target_error);
-  if (name == "time_limit") return number_at_least(value, 0, false, o.time_limit);
-  if (name == "shadows" || name == "specialize") {
-    auto b = parse_bool(value);
-    if (!b) return "must be true or false, got '" + shown(value) + "'";
-    (name == "shadows" ? o.shadows : o.specialize) = *b;
-    return std::nullopt;
-  }
-  if (name == "highlight") {
-    if (value == "phong")
-      o.highlight = Highlight::phong;
-    else if (value == "blinn")
-      o.highlight = Highlight::blinn;
-    else
-      return "must be phong or blinn, got '" + shown(value) + "'";
-    return std::nullopt;
-  }
-  if (name == "precision") {
-    if (value == "double")
-      o.precision = Precision::f64;
-    else if (value == "float")
-      o.precision = Precision::f32;
-    else
-      return "must be double or float, got '" + shown(value) + "'";
-    return std::nullopt;
-  }
-  if (name == "format") {
-    if (value == "png")
-      o.format = ImageFormat::png;
-    else if (value == "ppm")
-      o.format = ImageFormat::ppm;
-    else
-      return "must be png or ppm, got '" + shown(value) + "'";
-    return std::nullopt;
-  }
-  if (name == "profile") {  // TEMPORARY until the options table lands
-    if (value == "lecture") o.profile = Profile::lecture;
-    else if (value == "cpsc102") o.profile = Profile::cpsc102;
-    else return "must be lecture or cpsc102";
-    return std::nullopt;
-  }
-  if (name == "camera") {
-    if (value.empty() || value.size() > 256) return "must be a camera name";
-    o.camera = std::string(value);
-    return std::nullopt;
-  }
-  if (name == "seed") {
-    std::uint64_t s = 0;
-    auto [ptr, ec] = std::from_chars(value.data(), value.data() + value.size(), s);
-    if (ec != std::errc() || ptr != value.data() + value.size() || value.empty())
-      return "must be an integer in 0..18446744073709551615, got '" + shown(value) + "'";
-    o.seed = s;
-    return std::nullopt;
-  }
-  if (name == "background") {
-    // "r,g,b", "r g b" or one grey value.
-    std::vector<double> parts;
-    size_t i = 0;
-    while (i < value.size() && parts.size() <= 3) {
-      while (i < value.size() && (value[i] == ',' || value[i] == ' ')) ++i;
-      size_t j = i;
-      while (j < value.size() && value[j] != ',' && value[j] != ' ') ++j;
-      if (j > i) {
-        double c = 0;
-        if (auto err = number_at_least(value.substr(i, j - i), 0, false, c)) return err;
-        parts.push_back(c);
-      }
-      i = j;
-    }
-    if (parts.size() == 1) parts.assign(3, parts[0]);
-    if (parts.size() != 3) return "must be 3 numbers >= 0 (R,G,B) or one grey value";
-    o.background = {parts[0], parts[1], parts[2]};
-    return std::nullopt;
-  }
-  return "unknown option '" + shown(name) + "'";
+  const OptionSpec* spec = find_option(name);
+  if (!spec) return "unknown option '" + shown(name) + "'";
+  return spec->parse(options, value);
 }
 
 void apply_options(RenderOptions& options, const OptionSet& set, Diagnostics& diags) {
@@ -193,9 +255,11 @@ void apply_options(RenderOptions& options, const OptionSet& set, Diagnostics& di
   }
 }
 
-std::string_view to_string(Precision p) { return p == Precision::f64 ? "double" : "float"; }
-std::string_view to_string(Highlight h) { return h == Highlight::phong ? "phong" : "blinn"; }
-std::string_view to_string(ImageFormat f) { return f == ImageFormat::png ? "png" : "ppm"; }
+std::string_view to_string(Precision p) { return kPrecisions.name(p); }
+std::string_view to_string(Highlight h) { return kHighlights.name(h); }
+std::string_view to_string(ImageFormat f) { return kFormats.name(f); }
+std::string_view to_string(Profile p) { return kProfiles.name(p); }
+std::string_view to_string(Rounding r) { return kRoundings.name(r); }
 
 std::string format_number(double v) {
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
@@ -204,38 +268,16 @@ std::string format_number(double v) {
   return ec == std::errc() ? std::string(buf, ptr) : std::string("nan");
 }
 
-std::vector<std::pair<std::string, std::string>> option_pairs(const RenderOptions& o) {
-  auto colour = [](const std::array<double, 3>& c) {
-    return format_number(c[0]) + "," + format_number(c[1]) + "," + format_number(c[2]);
-  };
-  return {
-      {"spp", std::to_string(o.spp)},
-      {"max_depth", std::to_string(o.max_depth)},
-      {"max_dist", std::isinf(o.max_dist) ? "unlimited" : format_number(o.max_dist)},
-      {"shadows", o.shadows ? "true" : "false"},
-      {"highlight", std::string(to_string(o.highlight))},
-      {"bailout", format_number(o.bailout)},
-      {"precision", std::string(to_string(o.precision))},
-      {"background", colour(o.background)},
-      {"width", std::to_string(o.width)},
-      {"height", std::to_string(o.height)},
-      {"camera", o.camera},
-      {"seed", std::to_string(o.seed)},
-      {"format", std::string(to_string(o.format))},
-      {"target_error", format_number(o.target_error)},
-      {"time_limit", format_number(o.time_limit)},
-      {"specialize", o.specialize ? "true" : "false"},
-      {"profile", o.profile == Profile::lecture ? "lecture" : "cpsc102"},
-  };
+std::vector<std::pair<std::string, std::string>> option_pairs(const RenderOptions& options) {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const OptionSpec& s : kOptions) out.emplace_back(s.name, s.print(options));
+  return out;
 }
 
 std::string canonical_string(const RenderOptions& options) {
   std::string out;
-  for (auto& [k, v] : option_pairs(options)) {
-    // Specialization never changes a byte, so it does not split the cache.
-    if (k == "specialize") continue;
-    out += k + "=" + v + ";";
-  }
+  for (const OptionSpec& s : kOptions)
+    if (s.affects_pixels) out += std::string(s.name) + "=" + s.print(options) + ";";
   return out;
 }
 

@@ -333,7 +333,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     f.lights = any_light && objects;
     f.shadows = options.shadows && f.lights;
     f.highlight = f.lights && reflective;
-    f.reflection = reflective && options.max_depth > 0;
+    f.reflection = reflective && p.max_depth > 0;
     // Without diffuse or highlight a light adds exact zeros (while E/r is finite, which the
     // tracer checks): it needs no shadow ray.
     for (size_t i = 0; i < p.materials.size(); ++i)
