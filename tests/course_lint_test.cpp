@@ -246,6 +246,15 @@ tiled_plane floor
   EXPECT_NE(diags.items()[0].message.find("dimensions w h"), std::string::npos);
 }
 
+TEST(CourseLint, ResumesOnlyAtAKeywordThatStartsAnEntity) {
+  // Prose mentions "plane" and "light" without starting one.
+  Diagnostics diags = lint(std::string(kHead) +
+                           "A plane and a light make the scene\n"
+                           "sphere s { material m center 0 0 -5 radius 1 }\n");
+  ASSERT_EQ(diags.items().size(), 1u) << dump(diags);
+  EXPECT_EQ(diags.items()[0].code, "course-unknown-entity");
+}
+
 TEST(CourseLint, ReportsAGluedKeywordBraceOnceThoughTheNameIsMissing) {
   Diagnostics diags = lint(std::string(kHead) + "light{ location 0 0 0 emissivity 1 1 1 }\n");
   ASSERT_EQ(diags.items().size(), 1u) << dump(diags);

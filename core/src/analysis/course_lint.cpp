@@ -126,6 +126,8 @@ class CourseLinter {
   void check_missing(const Body& b, const Word& close);
   void unknown_attribute(Body& b, const Word& w, std::string_view word);
   void skip_to_known(const Body& b);
+  static bool brace_follows(Stream probe);
+  bool entity_starts_here() const;
   void skip_unknown_entity();
   void skip_block();
   void skip_vector(std::string_view first);
@@ -274,19 +276,35 @@ std::vector<Diagnostic> CourseLinter::run() {
   return std::move(out_);
 }
 
-// Resumes after an entity the program does not know (its keyword already read): past its body
-// when a '{' follows within two words, else at the next entity keyword.
-void CourseLinter::skip_unknown_entity() {
+// Whether the next word is an entity keyword that starts an entity: a '{' follows within two
+// words. A keyword in prose or used as a value does not.
+bool CourseLinter::entity_starts_here() const {
   Stream probe = in_;
-  bool body = false;
-  for (int i = 0; i < 2 && !body; ++i) {
+  Word keyword = probe.peek();
+  const size_t brace = keyword.text.find('{');
+  if (!is_keyword(keyword.text.substr(0, brace))) return false;
+  if (brace != std::string_view::npos) return true;
+  probe.take(keyword.text.size());
+  return brace_follows(probe);
+}
+
+// Whether a '{' follows within the next two words (not crossing an entity keyword).
+bool CourseLinter::brace_follows(Stream probe) {
+  for (int i = 0; i < 2; ++i) {
     Word w = probe.peek();
-    if (!w || is_keyword(w.text)) break;
-    body = w.text.find('{') != std::string_view::npos;
+    if (!w || is_keyword(w.text)) return false;
+    if (w.text.find('{') != std::string_view::npos) return true;
     probe.take(w.text.size());
   }
-  if (body) return skip_block();
-  for (Word w = in_.peek(); w && !is_keyword(w.text); w = in_.peek()) in_.take(w.text.size());
+  return false;
+}
+
+// Resumes after an entity the program does not know (its keyword already read): past its body
+// when it has one, else at the next entity keyword that starts an entity (`KEYWORD NAME {`),
+// so that prose or a stray word does not restart on a keyword inside it.
+void CourseLinter::skip_unknown_entity() {
+  if (brace_follows(in_)) return skip_block();
+  for (Word w = in_.peek(); w && !entity_starts_here(); w = in_.peek()) in_.take(w.text.size());
 }
 
 // Up to and including the '}' that closes the next '{'.
@@ -445,7 +463,7 @@ void CourseLinter::read_body(Body& b) {
     std::string_view word = t.substr(0, brace);
     course::AttrRef ref = course::find_attr(b.entity, word);
     bool late_material = b.entity.object && word == "material";
-    if (!ref && !late_material && is_keyword(word)) {
+    if (!ref && !late_material && entity_starts_here()) {
       warn("course-brace",
            b.label + " has no '}' before this " + quote(word) + ": " + std::string(kProgram) +
                " reads it as an attribute and stops with 'bad attr " + std::string(t) +
@@ -634,7 +652,8 @@ std::string_view CourseLinter::read_word_value(Body& b, const Attr& attr, const 
 
 void CourseLinter::check_material(const Body& b, std::string_view attr, std::string_view name,
                                   const Word& w) {
-  if (name.size() > course::kNameMax)
+  // A long name of a defined material was reported at its definition: renaming fixes both.
+  if (name.size() > course::kNameMax && !materials_.has(name))
     warn("course-name-length",
          "the material name " + quote(name) + " has " + std::to_string(name.size()) +
              " characters: " + std::string(kProgram) + " reads it into a 32-byte buffer (31 " +
@@ -713,7 +732,7 @@ void CourseLinter::skip_to_known(const Body& b) {
     if (t[0] == '{' || t[0] == '}') return;
     std::string_view word = t.substr(0, t.find_first_of("{}"));
     if (course::find_attr(b.entity, word) || (b.entity.object && word == "material") ||
-        is_keyword(word))
+        entity_starts_here())
       return;
     in_.take(word.size());
   }
