@@ -17,9 +17,12 @@
 // - A word of '}' (or starting with it) ends an entity; the rest of that word is dropped.
 //
 // Where the course is silent, this lint decides:
-// - Every attribute of an object's or light's groups is required (as the course's constructors
-//   assert), and a camera needs all three; a material needs at least one (material.cpp).
-//   Repeating an attribute is fatal only in a group that reads a fixed count.
+// - Every attribute of an object's or light's groups is required (the constructors in students'
+//   copies assert `mask == 3`), and a camera needs all three; a material needs at least one
+//   (the given material.cpp asserts it). Repeating an attribute is fatal only in a group that
+//   reads a fixed count; in the last group the later value wins.
+// - A brace glued to a word is reported once; the lint then reads the word as if split there
+//   (what the student meant), although the program would drop or keep the rest of the word.
 // - triangle: one group in free order, normal and point optional (no reference run exists).
 // - Names (entities, materials, textures) over 31 characters overflow; texname over 63; the
 //   size of a texture's filename buffer is unknown, so paths are not checked.
@@ -30,7 +33,9 @@
 // After a problem the lint goes on as rayfarm would read the file (the student wants every
 // problem at once) and avoids cascades: one warning per problem, at the token where the course
 // program fails (too few values: at the attribute), then it resynchronises at the next known
-// attribute, '}' or entity keyword.
+// attribute, '}' or entity keyword that starts an entity (`KEYWORD NAME {`). A block of comment
+// lines is one problem; after an order or unknown-attribute problem an entity reports no more
+// order or missing attributes.
 #include <algorithm>
 #include <array>
 #include <string>
