@@ -65,6 +65,13 @@ int model_parser(const std::uint8_t* data, std::size_t size) {
   for (const Diagnostic& d : diags.items()) (void)format_diagnostic(d, "fuzz", text);
   check(diags.has_errors() || scene.has_value(), "no errors but no scene");
   if (detect_format(text) == SceneFormat::model) {
+    // The course lint reads any bytes, rejected files too, and points inside the text.
+    Diagnostics course;
+    lint_course(text, course);
+    for (const Diagnostic& d : course.items()) {
+      check(d.where.line >= 1 && d.where.column >= 1, "course lint position");
+      (void)format_diagnostic(d, "fuzz", text);
+    }
     // The loader's fast path decides as the full parser does, to the source positions.
     const LoadedScene quick = load_scene(text, LoadDetail::scene);
     check(quick.scene.has_value() == scene.has_value(), "fast path and full parser disagree");

@@ -7,7 +7,7 @@
 
 namespace rayfarm::fuzz {
 
-// Model-file parse + build + lint; a file that parses must survive model and JSON round trips.
+// Model-file parse + build + lint (and the course lint); a file that parses must survive model and JSON round trips.
 int model_parser(const std::uint8_t* data, std::size_t size);
 // JSON scene parse + validate + prepare + a tiny render.
 int json_scene(const std::uint8_t* data, std::size_t size);

@@ -1,6 +1,8 @@
 // Warnings for legal but suspicious scenes (`rayfarm check`).
 #pragma once
 
+#include <string_view>
+
 #include "rayfarm/diagnostic.h"
 #include "rayfarm/options.h"
 #include "rayfarm/scene.h"
@@ -10,5 +12,11 @@ namespace rayfarm {
 // Adds warnings: a light inside a sphere, the eye inside a sphere, an object behind the eye,
 // a material never used, a scene that renders entirely black, a camera option naming no camera.
 void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags);
+
+// Adds a warning (codes "course-...") wherever the course's reference program (CPSC 102,
+// 2014-18) would stop on or misread this model file: comments, unknown entities or attributes,
+// attribute order, missing or undefined materials, value counts, long names, `<x,y,z>` vectors,
+// glued braces. Works on the raw text, so also on files rayfarm itself rejects.
+void lint_course(std::string_view text, Diagnostics& diags);
 
 }  // namespace rayfarm
