@@ -117,7 +117,7 @@ BvhBox shape_box(const PreparedShape<T>& s) {
     return b;
   };
   if (s.kind == PreparedShape<T>::revsurf) {
-    const double r = profile_max_radius<double>(s.surfer);
+    const double r = revsurf_max_radius(s.surfer, static_cast<double>(s.height));
     const glm::dvec3 top = o + static_cast<double>(s.height) * a;
     const glm::dvec3 ext = r * glm::sqrt(glm::max(glm::dvec3(0), 1.0 - a * a));
     return box_of({o - ext, o + ext, top - ext, top + ext});
