@@ -72,6 +72,7 @@ void post_render(Service& svc, const Request& req, Response& res) {
     }
     std::ifstream in(sample->path, std::ios::binary);
     text.assign(std::istreambuf_iterator<char>(in), {});
+    textures = sample->textures;
   } else if (req.is_multipart_form_data()) {
     if (!req.has_file("scene"))
       return send_error(res, 400, "missing_scene", "multipart upload without a 'scene' part");

@@ -40,6 +40,7 @@ struct Sample {
   std::string name;
   std::string description;
   std::filesystem::path path;
+  TextureFiles textures;  // the bundle's files beside it, read at start (requests name none)
 };
 
 class Service {

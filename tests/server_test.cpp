@@ -1629,6 +1629,32 @@ TEST(ServerTextures, PathsAreKeysNeverTheServersFiles) {
   EXPECT_EQ(r.png, local_textured(scene, {{"/etc/passwd", ppm}}, {}));
 }
 
+// A bundled sample's textures are files of the samples directory, read at start: a request
+// for it names none, and a sample whose texture lies outside the directory is not offered.
+TEST(ServerTextures, BundledSampleRendersWithTheTexturesBesideIt) {
+  TempDir dir;
+  auto write = [](const std::filesystem::path& p, const std::string& bytes) {
+    std::filesystem::create_directories(p.parent_path());
+    std::ofstream(p, std::ios::binary) << bytes;
+  };
+  const std::string inside = "# a texture beside it\n" + one_texture_scene("maps/brick.ppm");
+  write(dir.path / "samples" / "inside.txt", inside);
+  write(dir.path / "samples" / "maps" / "brick.ppm", texture_ppm(6));
+  write(dir.path / "samples" / "outside.txt", one_texture_scene("../brick.ppm"));
+  write(dir.path / "brick.ppm", texture_ppm(6));
+  Settings s = test_settings();
+  s.samples_dir = (dir.path / "samples").string();
+  TestServer server(s);
+  auto c = server.client();
+  Json list = json_of(c->Get("/samples"));
+  ASSERT_EQ(list["samples"].size(), 1u) << list.dump();
+  EXPECT_EQ(list["samples"][0]["name"], "inside");
+  auto r = c->Post("/render?sample=inside&wait=1");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->body, local_textured(inside, {{"maps/brick.ppm", texture_ppm(6)}}, {}));
+}
+
 // ---- Samples, health, metrics, authentication --------------------------------------------
 
 TEST(ServerInfo, SamplesListsTheBundledScenes) {
