@@ -26,6 +26,7 @@ struct RenderStats {
   int spp_target = 1;
   int tiles_done = 0;     // in the current pass
   int tiles_per_pass = 0;
+  int samples_per_pass = 1;  // the cpsc102 profile takes all of a pixel's samples at once
   double error_estimate = -1;  // standard error of the pixel means, 8-bit levels; -1: n/a
   std::vector<std::string> parts;  // pipeline parts this render runs
   std::string stop_reason;         // "spp", "target_error", "time_limit", "canceled"

@@ -173,14 +173,15 @@ V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_
     if (!light.texture || light.texture->width == 0) return {};
     e = filtered(e, texel(*light.texture, qx, qy, light.width, light.height));
   }
-  // The shadow ray walks on through translucent objects, each filtering the light.
-  ++counts.shadow;
+  // The shadow ray walks on through translucent objects, each filtering the light. (With
+  // shadows off no search runs, so no hit point is overwritten by one either.)
   V3 from = p;
   int skip = k;
   double remaining = d;
   double d_diffuse = d;
   const int last = static_cast<int>(s_.objects.size()) - 1;
-  for (;;) {
+  if (s_.shadows) ++counts.shadow;
+  for (; s_.shadows;) {
     double t;
     const int m = closest(from, l, skip, t);
     if (m < 0 || !(t < remaining)) break;
