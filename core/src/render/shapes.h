@@ -117,10 +117,13 @@ Vec3<T> shape_texel(const PreparedShape<T>& s, const Vec3<T>& p) {
   frame_coords(s, p, qx, qy);
   long long tx, ty;
   if (s.mode == 0) {
-    tx = static_cast<long long>(std::floor(qx / s.width * img.width));
-    ty = static_cast<long long>(std::floor(qy / s.height * img.height));
-    tx = std::clamp<long long>(tx, 0, img.width - 1);
-    ty = std::clamp<long long>(ty, 0, img.height - 1);
+    // Clamped as floating point first: a coordinate may be huge or not finite.
+    auto index = [](T q, T size, int n) {
+      const T i = std::floor(q / size * static_cast<T>(n));
+      return i > 0 ? (i < static_cast<T>(n - 1) ? static_cast<long long>(i) : n - 1LL) : 0LL;
+    };
+    tx = index(qx, s.width, img.width);
+    ty = index(qy, s.height, img.height);
   } else {
     auto wrap = [](T q, T size, int n) {
       const T k = std::floor(q / size);
