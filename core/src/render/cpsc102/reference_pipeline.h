@@ -37,6 +37,7 @@ class ReferencePipeline {
   std::vector<std::string> parts() const {
     std::vector<std::string> out{"primary", "reference"};
     if (s_.spp > 1) out.push_back("supersampling");
+    if (!s_.bvh.empty()) out.push_back("bvh");
     return out;
   }
 

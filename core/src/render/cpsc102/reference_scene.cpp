@@ -3,6 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
+
+#include <glm/common.hpp>
+#include <glm/exponential.hpp>
+
+#include "geometry/revsurf.h"
 
 namespace rayfarm::cpsc102 {
 namespace {
@@ -116,7 +123,73 @@ struct Builder {
   }
 };
 
+// The box in which the object's hit test can report a hit, or nullopt when that cannot be
+// bounded tightly: infinite planes, and spheres so small against the scene that the
+// rounding of the program's discriminant (b² − 4ac, about eps·|base − centre|²/r wide)
+// could exceed the hierarchy's margin.
+std::optional<BvhBox> box_of(const RefObject& o, double extent) {
+  auto around = [](std::initializer_list<glm::dvec3> points) {
+    BvhBox b{glm::dvec3(std::numeric_limits<double>::infinity()),
+             glm::dvec3(-std::numeric_limits<double>::infinity())};
+    for (const glm::dvec3& q : points) {
+      b.lo = glm::min(b.lo, q);
+      b.hi = glm::max(b.hi, q);
+    }
+    return b;
+  };
+  auto g = [](const V3& v) { return glm::dvec3(v.x, v.y, v.z); };
+  switch (o.kind) {
+    case RefObject::sphere: {
+      if (!(o.radius > 1e-6 * extent)) return std::nullopt;
+      const glm::dvec3 c = g(o.center);
+      return BvhBox{c - o.radius, c + o.radius};
+    }
+    case RefObject::fplane:
+    case RefObject::texplane: {
+      const glm::dvec3 p = g(o.point), u = g(o.frame.row0) * o.width, v = g(o.frame.row1) * o.height;
+      return around({p, p + u, p + v, p + u + v});
+    }
+    case RefObject::triangle: {
+      const glm::dvec3 p = g(o.point), u = g(o.frame.row0), v = g(o.frame.row1);
+      return around({p + o.tx[0] * u + o.ty[0] * v, p + o.tx[1] * u + o.ty[1] * v,
+                     p + o.tx[2] * u + o.ty[2] * v});
+    }
+    case RefObject::revsurf: {
+      const double r = revsurf_max_radius(o.surfer, o.rev_height);
+      const glm::dvec3 a = g(o.axis), b = g(o.base), top = b + o.rev_height * a;
+      const glm::dvec3 ext = r * glm::sqrt(glm::max(glm::dvec3(0), 1.0 - a * a)) + 1e-9 * r;
+      return around({b - ext, b + ext, top - ext, top + ext});
+    }
+    default:
+      return std::nullopt;  // planes and tiled planes are infinite
+  }
+}
+
 }  // namespace
+
+void build_reference_bvh(RefScene& s) {
+  double extent = std::max({std::abs(s.eye.x), std::abs(s.eye.y), std::abs(s.eye.z)});
+  for (const RefObject& o : s.objects)
+    for (const V3& v : {o.center, o.point, o.base})
+      extent = std::max({extent, std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  std::vector<BvhBox> boxes;
+  std::vector<std::int32_t> boxed;
+  s.always.clear();
+  for (std::size_t k = 0; k < s.objects.size(); ++k) {
+    if (auto box = box_of(s.objects[k], extent)) {
+      boxes.push_back(*box);
+      boxed.push_back(static_cast<std::int32_t>(k));
+    } else {
+      s.always.push_back(static_cast<std::int32_t>(k));
+    }
+  }
+  s.bvh = build_bvh(boxes, {});
+  if (s.bvh.empty()) {  // nothing to bound, or coordinates too far out: the loop
+    s.always.clear();
+    return;
+  }
+  for (std::int32_t& i : s.bvh.order) i = boxed[i];  // leaves name objects
+}
 
 RefScene prepare_reference(const Scene& scene, const RenderOptions& options, int camera) {
   const Camera& cam = scene.cameras.at(camera);
@@ -158,6 +231,7 @@ RefScene prepare_reference(const Scene& scene, const RenderOptions& options, int
     }
     s.lights.push_back(r);
   }
+  if (options.specialize && s.objects.size() >= kReferenceBvhMin) build_reference_bvh(s);
   return s;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "accel/bvh.h"
 #include "rayfarm/options.h"
 #include "rayfarm/scene.h"
 #include "render/cpsc102/x87.h"
@@ -78,10 +79,20 @@ struct RefScene {
   std::vector<RefMaterial> materials;
   std::vector<RefObject> objects;
   std::vector<RefLight> lights;
+  // With many objects: the bounded ones in a hierarchy (whose answers are the loop's), the
+  // rest (planes, and spheres too small for its margin) tested every time. Empty: a loop.
+  Bvh bvh;
+  std::vector<std::int32_t> always;
 };
+
+// Below this many objects the loop is as fast.
+inline constexpr std::size_t kReferenceBvhMin = 8;
 
 // Builds the reference program's view of `scene`; textures must be resolved. Returns an
 // error message for what it cannot render.
 RefScene prepare_reference(const Scene& scene, const RenderOptions& options, int camera);
+
+// Puts the bounded objects behind a hierarchy (prepare_reference does when it pays).
+void build_reference_bvh(RefScene& scene);
 
 }  // namespace rayfarm::cpsc102

@@ -87,6 +87,7 @@ double ReferenceTracer::test(int k, const V3& base, const V3& dir) {
 }
 
 int ReferenceTracer::closest(const V3& base, const V3& dir, int skip, double& t) {
+  if (!s_.bvh.empty()) return closest_bvh(base, dir, skip, t);
   int best = -1;
   t = 0;
   const int n = static_cast<int>(s_.objects.size());
@@ -98,6 +99,34 @@ int ReferenceTracer::closest(const V3& base, const V3& dir, int skip, double& t)
       t = tk;
     }
   }
+  return best;
+}
+
+int ReferenceTracer::closest_bvh(const V3& base, const V3& dir, int skip, double& t) {
+  int best = -1;
+  t = 0;
+  auto consider = [&](int k) {
+    if (k == skip) return;
+    const double tk = test(k, base, dir);
+    if (tk > 0 && (best < 0 || tk < t || (tk == t && k < best))) {
+      best = k;
+      t = tk;
+    }
+  };
+  for (std::int32_t k : s_.always) consider(k);
+  BvhRay ray;
+  if (ray.init(base, dir, s_.bvh.scale)) {
+    const float no_limit = std::numeric_limits<float>::infinity();
+    bvh_closest(s_.bvh, ray, best < 0 ? no_limit : float_limit_up(t),
+                [&](std::int32_t first, std::int32_t count) {
+                  for (std::int32_t i = first; i < first + count; ++i) consider(s_.bvh.order[i]);
+                  return best < 0 ? no_limit : float_limit_up(t);
+                });
+  } else {  // too far out for the hierarchy's float boxes: every object
+    for (int k = 0; k < static_cast<int>(s_.objects.size()); ++k) consider(k);
+  }
+  for (int k : watched_)
+    if (k != skip) test(k, base, dir);  // its stored point, as the program's full search left it
   return best;
 }
 
@@ -229,14 +258,19 @@ V3 ReferenceTracer::trace(const V3& base, int base_owner, const V3& dir, double 
   total = R(static_cast<X>(total) + t);
   const V3 p = stored_[k];
   const V3 n = normal_at(k, p);
+  const RefMaterial& m = s_.materials[s_.objects[k].material];
+  // A reflected ray leaves from stored_[k] as the program passed it, after this hit's
+  // shadow walks and the transmitted ray's searches (which may test k) have run: it must
+  // change as the program's searches changed it.
+  const bool secondary = depth < s_.max_depth && (m.transparency != 0 || m.reflects);
+  if (secondary) watched_.push_back(k);
   V3 ambient, diffuse;
   surface(k, p, ambient, diffuse);
   V3 c = ambient;
   for (int j = 0; j < static_cast<int>(s_.lights.size()); ++j)
     c = add(c, illuminate(j, k, p, n, base_owner, base, diffuse));
   for (int i = 0; i < 3; ++i) c[i] = R(static_cast<X>(c[i]) / total);
-  if (depth >= s_.max_depth) return c;
-  const RefMaterial& m = s_.materials[s_.objects[k].material];
+  if (!secondary) return c;
   if (m.transparency != 0) {
     ++counts.reflection;
     const V3 through = trace(p, k, dir, total, k, depth + 1);
@@ -250,6 +284,7 @@ V3 ReferenceTracer::trace(const V3& base, int base_owner, const V3& dir, double 
     const V3 r = sub(dir, scale(nk, R(2 * static_cast<X>(dot(nk, dir)))));
     c = add(c, mul(m.specular, trace(from, k, r, total, k, depth + 1)));
   }
+  watched_.pop_back();
   return c;
 }
 

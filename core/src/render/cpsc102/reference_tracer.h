@@ -34,6 +34,8 @@ class ReferenceTracer {
   double test(int k, const V3& base, const V3& dir);
   // The nearest object (file order breaks ties) with t > 0, skipping `skip` entirely.
   int closest(const V3& base, const V3& dir, int skip, double& t);
+  // The same through the hierarchy.
+  int closest_bvh(const V3& base, const V3& dir, int skip, double& t);
   V3 trace(const V3& base, int base_owner, const V3& dir, double total, int last, int depth);
   // `origin` is the ray's origin: the eye for a primary ray; a secondary ray's glint looks
   // from its `base_owner`'s stored point instead.
@@ -45,6 +47,10 @@ class ReferenceTracer {
 
   const RefScene& s_;
   std::vector<V3> stored_;  // per object: the last point its hit test computed
+  // Objects whose stored point is still to be read (by a glint, or by a reflected ray still
+  // to leave). The program tested every object in every search; with a hierarchy that skips
+  // some, these are tested anyway, so their stored points are the program's.
+  std::vector<int> watched_;
 };
 
 }  // namespace rayfarm::cpsc102
