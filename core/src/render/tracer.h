@@ -334,7 +334,7 @@ class Tracer {
     if (s.inside) s.n = -s.n;
     s.m = &s_.materials[material];
     const PreparedMaterial<T>* colours = s.m;
-    if (tiles && !tile_is_odd(*tiles, p)) {
+    if (tiles && !on_own_square(*tiles, p)) {
       if (tiles->world_xz) {  // the 2009 form alternates the ambient colour only
         s.ambient = s_.materials[tiles->alt_material].ambient;
         s.diffuse = s.m->diffuse;
@@ -347,13 +347,14 @@ class Tracer {
     return s;
   }
 
-  // The course's tile rule: odd squares have the plane's own material.
-  static bool tile_is_odd(const PreparedPlane<T>& pl, const Vec3<T>& p) {
+  // The course's tile rule: odd squares have the plane's own material; in the 2009 form the
+  // even ones (the foreground), as in the cpsc102 profile.
+  static bool on_own_square(const PreparedPlane<T>& pl, const Vec3<T>& p) {
     T ix, iy;
     if (pl.world_xz) {
       ix = std::floor((p.x + 10000) / pl.tile_w);
       iy = std::floor((p.z + 10000) / pl.tile_h);
-      return std::fmod(ix + iy, T(2)) != 0;  // 2009: even squares are the foreground
+      return std::fmod(ix + iy, T(2)) == 0;
     }
     ix = std::floor(glm::dot(pl.u, p) / pl.tile_w);
     iy = std::floor(glm::dot(pl.v, p) / pl.tile_h);
