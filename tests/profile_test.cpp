@@ -1,60 +1,21 @@
 // The cpsc102 profile (COURSE.md) on tiny scenes whose bytes are worked out by hand from the
 // course's rules, in long double here, independently of the reference tracer. Where a rule
 // differs from the lecture profile, the lecture's byte is asserted beside it.
-#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 
+#include "hand_computed.h"
 #include "render/cpsc102/glibc_random.h"
-#include "test_util.h"
 
 namespace rayfarm {
 namespace {
 
-using test::pixel;
-using test::render;
-using test::scene_from;
-using L = long double;
-
-// 3×3 pixels over a 2×2 window seen from (1, 1, 5): pixel (x, y) looks through the screen
-// point (x, y, 0) and meets the wall z = −5 at (2x − 1, 2y − 1, −5). Only the centre ray,
-// (0, 0, −1), and the rays of the middle column and row have exact zero components.
-const std::string kCamera = "camera c { pixeldim 3 3 worlddim 2 2 viewpoint 1 1 5 }\n";
+using namespace test;
 
 RenderOptions course(RenderOptions o = {}) {
   o.profile = Profile::cpsc102;
   return o;
 }
-
-// Channel c of pixel (x, y), y = 0 the bottom row of the world (the last row of the file).
-int at(const Image& img, int x, int y, int c) { return pixel(img, x, img.height - 1 - y)[c]; }
-
-// The course's byte: (unsigned char)(v·255) after clamping. Fails where v·255 is so near an
-// integer that this test's own rounding could decide it (a knife edge the test must avoid).
-int trunc_byte(L v) {
-  v = std::clamp(v, L(0), L(1));
-  const L s = v * 255;
-  const L frac = s - std::floor(s);
-  EXPECT_TRUE(v == 0 || v == 1 || (frac > 1e-9L && frac < 1 - 1e-9L)) << "knife edge: " << s;
-  return static_cast<int>(s);
-}
-
-// The lecture's byte, floor(255v + 0.5), with the same guard.
-int round_byte(L v) {
-  v = std::clamp(v, L(0), L(1));
-  const L s = v * 255 + 0.5L;
-  const L frac = s - std::floor(s);
-  EXPECT_TRUE(v == 0 || v == 1 || (frac > 1e-9L && frac < 1 - 1e-9L)) << "knife edge: " << s;
-  return static_cast<int>(std::floor(s));
-}
-
-// From the eye (1, 1, 5) to where pixel (x, y) meets the wall z = −5.
-L wall_distance(int x, int y) {
-  return 2 * std::sqrt(L((x - 1) * (x - 1) + (y - 1) * (y - 1) + 25));
-}
-
-// The centre pixel's channel c.
-int centre(const Image& img, int c) { return at(img, 1, 1, c); }
 
 // ---------------------------------------------------------------------------------------
 // §1 Camera and bytes
@@ -260,6 +221,18 @@ TEST(Cpsc102, RayFromInsideASphereSeesNothingOfIt) {
   EXPECT_EQ(centre(render(s), 0), round_byte(3.3L / 10));
 }
 
+TEST(Cpsc102, NormalIsNeverTurnedTowardsTheViewer) {
+  // An fplane whose normal points away from the eye, lit from the eye's side: cos < 0, no
+  // light (the lecture turns the normal and lights it: see entities_test).
+  const Scene s = scene_from(kCamera + R"(
+    material m { ambient 0 4.3 0 diffuse 45 0 0 }
+    light { location 1 1 5 emissivity 1 }
+    fplane { material m normal 0 0 -1 point -2 4 -5 xdir 1 0 0 dimensions 6 6 })");
+  const Image img = render(s, course());
+  EXPECT_EQ(centre(img, 1), trunc_byte(4.3L / 10)) << "the fplane is hit";
+  EXPECT_EQ(centre(img, 0), 0);
+}
+
 TEST(Cpsc102, FplaneIncludesItsNearEdges) {
   // The window starts at (1, 1, −5): the middle column meets it at q.x = 0 exactly, the
   // middle row at q.y = 0; the right column and top row well inside (q ≈ 2 of 2.5).
@@ -314,30 +287,6 @@ TEST(Cpsc102, TiledPlaneOddSquaresUseTheMaterialEvenSquaresTheAltmaterial) {
     }
 }
 
-// The 2009 tiled plane: a floor y = −1 seen from (1, 3, 5), squares 2 wide in x and 3 deep
-// in z. Pixel (x, y) meets the floor after s = 4/(3 − y) times (x − 1, y − 3, −5).
-struct FloorHit {
-  L px, pz, path;
-};
-FloorHit floor_hit(int x, int y) {
-  const L s = 4.0L / (3 - y);
-  const L len = std::sqrt(L((x - 1) * (x - 1) + (y - 3) * (y - 3) + 25));
-  return {1 + s * (x - 1), 5 - 5 * s, s * len};
-}
-const std::string kFloor2009 = R"(
-  camera c { pixeldim 3 3 worlddim 2 2 viewpoint 1 3 5 }
-  material m { ambient 5 0 0 diffuse 0 0 4.5 }
-  material alt { ambient 0 5 0 diffuse 0 0 9 }
-  light { location 1 9 -5 emissivity 1 }
-  tiled_plane { material m normal 0 1 0 point 0 -1 0 dimension 2 3 altmaterial alt })";
-
-// Whether the 2009 rule puts the plane's own material on the square of (px, pz): an even
-// (int)((x + 10000)/w) + (int)((z + 10000)/h). Rows y = 0, 1, 2 give alt-m-alt, m-alt-m,
-// m-m-m: z decides as much as x.
-bool foreground_2009(L px, L pz) {
-  return (static_cast<long>((px + 10000) / 2) + static_cast<long>((pz + 10000) / 3)) % 2 == 0;
-}
-
 TEST(Cpsc102, TiledPlane2009FormAlternatesOnlyTheAmbientOnWorldXAndZ) {
   const Image img = render(scene_from(kFloor2009), course());
   for (int y = 0; y < 3; ++y)
@@ -345,26 +294,14 @@ TEST(Cpsc102, TiledPlane2009FormAlternatesOnlyTheAmbientOnWorldXAndZ) {
       const FloorHit h = floor_hit(x, y);
       const bool fg = foreground_2009(h.px, h.pz);
       EXPECT_EQ(fg, y == 2 || (x + y) % 2 == 1) << "the pattern the comment promises";
-      // The diffuse is always the plane's own material's: the light (1, 9, −5).
-      const L lx = 1 - h.px, ly = 10, lz = -5 - h.pz, d = std::sqrt(lx * lx + ly * ly + lz * lz);
+      L cos, d;
+      floor_light(h, cos, d);
       EXPECT_EQ(at(img, x, y, 0), fg ? trunc_byte(5 / h.path) : 0) << x << "," << y;
       EXPECT_EQ(at(img, x, y, 1), fg ? 0 : trunc_byte(5 / h.path)) << x << "," << y;
-      EXPECT_EQ(at(img, x, y, 2), trunc_byte(4.5L * (ly / d) / d / h.path)) << x << "," << y;
+      // The diffuse is always the plane's own material's.
+      EXPECT_EQ(at(img, x, y, 2), trunc_byte(4.5L * cos / d / h.path)) << x << "," << y;
     }
 }
-
-// A 3×3 texture whose every channel differs; `centre` 255 255 255 at column 1, row 1.
-Image texture3() {
-  Image t(3, 3);
-  const int v[27] = {255, 128, 64, 200, 100, 50, 90, 180, 30,   //
-                     10,  20,  250, 255, 255, 255, 128, 0, 77,  //
-                     33,  66,  99,  150, 160, 170, 240, 230, 220};
-  std::copy(v, v + 27, t.rgb.begin());
-  return t;
-}
-
-// Texel (column, file row) of an image, channel c.
-int texel(const Image& t, int column, int row, int c) { return t.rgb[3 * (row * t.width + column) + c]; }
 
 // A texplane over the wall from (−2.5, −2.5, −5), 6×6: pixel (x, y) meets it at
 // q = (2x + 1.5, 2y + 1.5), well inside texels. Ambient 4.5 and diffuse 45 under a light at
@@ -398,8 +335,7 @@ TEST(Cpsc102, TexplaneMode0StretchesTheImageAndMultipliesByTexelOver256) {
 
 TEST(Cpsc102, TexplaneMode1RepeatsOneTexelPerPixelOfWorldSize) {
   // A pixel is 2/3 world units: tx = (int)(q.x / (2/3)) mod 4 = 2, 5, 8 mod 4 = 2, 1, 0.
-  Image tex(4, 4);
-  for (int i = 0; i < 48; ++i) tex.rgb[i] = static_cast<std::uint8_t>(255 - 5 * i);
+  const Image tex = texture4();
   const Image img = render(scene_from(texplane_scene(1), {{"t.ppm", tex}}), course());
   const int index[3] = {2, 1, 0};
   for (int y = 0; y < 3; ++y)
