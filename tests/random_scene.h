@@ -6,6 +6,8 @@
 #include <random>
 #include <string>
 
+#include <glm/geometric.hpp>
+
 #include "rayfarm/scene.h"
 
 namespace rayfarm::test {
