@@ -33,8 +33,8 @@ TEST(Fplane, IncludesItsFarEdgeAndNothingBeyond) {
   auto scene = [](const std::string& width) {
     return scene_from(kCamera + R"(
       material m { ambient 10 }
-      fplane { material m normal 0 0 1 point -0.5 -2 -5 xdir 1 0 0 dimensions )" + width +
-                      " 10 }");
+      fplane { material m normal 0 0 1 point -0.5 -2 -5 xdir 1 0 0 dimensions )" +
+                      width + " 10 }");
   };
   const Image img = render(scene("1.5"));
   for (int y = 0; y < 3; ++y)
@@ -124,7 +124,8 @@ TEST(TexPlane, Mode0StretchesTheImageAndMultipliesByTexelOver255) {
   for (int r = 0; r < 3; ++r)
     for (int x = 0; x < 3; ++x)
       for (int c = 0; c < 3; ++c)
-        EXPECT_EQ(pixel(img, x, r)[c], round_byte(texplane_colour(x, 2 - r) * texel(tex, x, r, c) / 255))
+        EXPECT_EQ(pixel(img, x, r)[c],
+                  round_byte(texplane_colour(x, 2 - r) * texel(tex, x, r, c) / 255))
             << x << "," << r << "," << c;
   // The white centre texel: 0.86 -> 219 (texel/256 would give 218).
   EXPECT_EQ(pixel(img, 1, 1)[0], 219);
@@ -161,6 +162,13 @@ TEST(Triangle, InsideAndOnItsEdgesIsHitOutsideIsNot) {
   expect_triangle_pixels(render(scene_from(kCamera + R"(
     material m { ambient 10 }
     triangle { material m normal 0 0 1 point 0 0 -5 vertex1 1 -3 -5 vertex2 1 5 -5 vertex3 4 1 -5 })")));
+}
+
+TEST(Triangle, EdgeCountsWhicheverWayItsVerticesTurn) {
+  // The same triangle counter-clockwise: the inside's edge signs are the other way round.
+  expect_triangle_pixels(render(scene_from(kCamera + R"(
+    material m { ambient 10 }
+    triangle { material m normal 0 0 1 point 0 0 -5 vertex1 1 5 -5 vertex2 1 -3 -5 vertex3 4 1 -5 })")));
 }
 
 TEST(Triangle, VerticesAreProjectedAlongTheNormalIntoItsPlane) {

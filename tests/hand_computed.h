@@ -53,8 +53,8 @@ inline int round_byte(L v) {
 // A 3×3 texture whose channels all differ; texel (1, 1) is white.
 inline Image texture3() {
   Image t(3, 3);
-  const int v[27] = {255, 128, 64,  200, 100, 50,  90,  180, 30,   //
-                     10,  20,  250, 255, 255, 255, 128, 0,   77,   //
+  const int v[27] = {255, 128, 64,  200, 100, 50,  90,  180, 30,  //
+                     10,  20,  250, 255, 255, 255, 128, 0,   77,  //
                      33,  66,  99,  150, 160, 170, 240, 230, 220};
   std::copy(v, v + 27, t.rgb.begin());
   return t;

@@ -179,7 +179,8 @@ TEST(Cpsc102, PlaneHitsInFrontOfTheScreenAreIgnored) {
     return scene_from(kCamera + R"(
       material front { ambient 0 9 0 }
       material wall { ambient 4.3 0 0 }
-      plane { material front normal 0 0 1 point 0 0 )" + front_z + R"( }
+      plane { material front normal 0 0 1 point 0 0 )" +
+                      front_z + R"( }
       plane { material wall normal 0 0 1 point 0 0 -5 })");
   };
   // A plane at z = 3, between the eye and the screen: the centre ray goes through it.
@@ -200,7 +201,8 @@ TEST(Cpsc102, ShadowRaysIgnorePlaneHitsInFrontOfTheScreen) {
       material ceiling { ambient 0 }
       light { location 1 11 5 emissivity 1 }
       plane { material wall normal 0 0 1 point 0 0 -5 }
-      plane { material ceiling normal 0 1 0 point 0 )" + ceiling_y + " 0 }");
+      plane { material ceiling normal 0 1 0 point 0 )" +
+                      ceiling_y + " 0 }");
   };
   const L d = 10 * std::sqrt(2.0L);
   // 90 · (1/√2) / (10√2) / 10 = 0.45 -> 114.
@@ -251,8 +253,8 @@ TEST(Cpsc102, FplaneIncludesItsFarEdge) {
   auto scene = [](const std::string& width) {
     return scene_from(kCamera + R"(
       material m { ambient 10 }
-      fplane { material m normal 0 0 1 point -0.5 -2 -5 xdir 1 0 0 dimensions )" + width +
-                      " 10 }");
+      fplane { material m normal 0 0 1 point -0.5 -2 -5 xdir 1 0 0 dimensions )" +
+                      width + " 10 }");
   };
   const Image img = render(scene("1.5"), course());
   for (int y = 0; y < 3; ++y)
@@ -261,6 +263,27 @@ TEST(Cpsc102, FplaneIncludesItsFarEdge) {
           << x << "," << y;
   const Image narrower = render(scene("1.4999"), course());
   for (int y = 0; y < 3; ++y) EXPECT_EQ(at(narrower, 1, y, 0), 0) << y;
+}
+
+TEST(Cpsc102, TriangleIsHitInsideAndOnItsEdgesInEitherWinding) {
+  // COURSE §11's chosen rule. The triangle (1, −3), (1, 5), (4, 1) on the wall: the middle
+  // column lies on its edge x = 1 exactly, (2, 1) meets (3, 1) inside, (2, 0) and (2, 2)
+  // meet (3, ∓1), 2/3 outside the slanted edges. Both windings: the inside's edge signs
+  // are one way or the other.
+  for (const char* vertices : {"vertex1 1 -3 -5 vertex2 1 5 -5 vertex3 4 1 -5",
+                               "vertex1 1 5 -5 vertex2 1 -3 -5 vertex3 4 1 -5"}) {
+    const Image img = render(scene_from(kCamera + R"(
+      material m { ambient 10 }
+      triangle { material m normal 0 0 1 point 0 0 -5 )" +
+                                        std::string(vertices) + " }"),
+                             course());
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 3; ++x) {
+        const bool hit = x == 1 || (x == 2 && y == 1);
+        EXPECT_EQ(at(img, x, y, 0), hit ? trunc_byte(10 / wall_distance(x, y)) : 0)
+            << vertices << ": " << x << "," << y;
+      }
+  }
 }
 
 TEST(Cpsc102, TiledPlaneOddSquaresUseTheMaterialEvenSquaresTheAltmaterial) {
@@ -327,7 +350,8 @@ TEST(Cpsc102, TexplaneMode0StretchesTheImageAndMultipliesByTexelOver256) {
   for (int r = 0; r < 3; ++r)
     for (int x = 0; x < 3; ++x)
       for (int c = 0; c < 3; ++c)
-        EXPECT_EQ(pixel(img, x, r)[c], trunc_byte(texplane_colour(x, 2 - r) * texel(tex, x, r, c) / 256))
+        EXPECT_EQ(pixel(img, x, r)[c],
+                  trunc_byte(texplane_colour(x, 2 - r) * texel(tex, x, r, c) / 256))
             << x << "," << r << "," << c;
   // At the centre (colour 0.9, texel 255) /255 would give 229, /256 gives 228.
   EXPECT_EQ(pixel(img, 1, 1)[0], 228);
@@ -383,8 +407,9 @@ TEST(Cpsc102, ProjectorFiltersItsLightByTheSlidesTexelOver256) {
       for (int c = 0; c < 3; ++c) {
         const L d = wall_distance(x, y);
         const int expected =
-            x <= 1 && y <= 1 ? trunc_byte(90 * (texel(tex, x, 2 - y, c) / 256.0L) * (10 / d) / d / d)
-                             : 0;
+            x <= 1 && y <= 1
+                ? trunc_byte(90 * (texel(tex, x, 2 - y, c) / 256.0L) * (10 / d) / d / d)
+                : 0;
         EXPECT_EQ(at(img, x, y, c), expected) << x << "," << y << "," << c;
       }
 }

@@ -3,10 +3,9 @@
 #pragma once
 
 #include <cmath>
+#include <glm/geometric.hpp>
 #include <random>
 #include <string>
-
-#include <glm/geometric.hpp>
 
 #include "rayfarm/scene.h"
 
