@@ -171,6 +171,24 @@ TEST(Cpsc102, MaxDistOptionReplacesTwenty) {
             0);
 }
 
+TEST(Cpsc102, GlintOfAReflectedRayLooksFromTheMirrorsStaleHitPoint) {
+  // COURSE §8. The centre ray meets a small tilted mirror (an fplane) at (1, 1, −7) and goes
+  // on along −x to a shiny wall x = −3, 16 from the eye. The light (0, 1, −9) is seen from
+  // there along L = (3, 0, −2)/√13. Its shadow ray crosses the mirror's plane at
+  // (−0.6, 1, −8.6), outside its window: no shadow, but the mirror's hit test stored that
+  // point, and the glint's V now points from the wall to it: V = L, H = L, N·H = 3/√13.
+  // 10 · (3/√13)^10 / 16 = 0.0995 -> 25 (from the true origin (1, 1, −7): N·H = 0.957,
+  // 0.403 -> 102).
+  const Scene s = scene_from(kCamera + R"(
+    material mirror { specular 1 }
+    material wall { specular 1 shininess 10 }
+    light { location 0 1 -9 emissivity 10 }
+    fplane { material mirror normal -1 0 1 point 1.3535533905932737 0.5 -6.6464466094067263
+             xdir 0 1 0 dimensions 1 1 }
+    plane { material wall normal 1 0 0 point -3 0 0 })");
+  EXPECT_EQ(centre(render(s, course()), 0), trunc_byte(10 * std::pow(9.0L / 13, 5.0L) / 16));
+}
+
 // ---------------------------------------------------------------------------------------
 // §3 Surfaces
 
@@ -209,6 +227,18 @@ TEST(Cpsc102, ShadowRaysIgnorePlaneHitsInFrontOfTheScreen) {
   EXPECT_EQ(centre(render(scene("8"), course()), 1), trunc_byte(90 / std::sqrt(2.0L) / d / 10));
   EXPECT_EQ(centre(render(scene("5"), course()), 1), 0);
   EXPECT_EQ(centre(render(scene("8")), 1), 0) << "the lecture's ceiling blocks";
+}
+
+TEST(Cpsc102, ReflectedRaysIgnorePlaneHitsInFrontOfTheScreen) {
+  // A mirror facing the eye sends the centre ray back up to a wall behind the eye, z = 8.
+  const Scene s = scene_from(kCamera + R"(
+    material mirror { specular 1 }
+    material wall { ambient 11.27 }
+    plane { material mirror normal 0 0 1 point 0 0 -5 }
+    plane { material wall normal 0 0 -1 point 0 0 8 })");
+  EXPECT_EQ(centre(render(s, course()), 0), 0);
+  // The lecture sees the wall after 10 + 13: 11.27/23 = 0.49 -> 125.
+  EXPECT_EQ(centre(render(s), 0), round_byte(11.27L / 23));
 }
 
 TEST(Cpsc102, RayFromInsideASphereSeesNothingOfIt) {
