@@ -93,7 +93,9 @@ struct ShapeMaker {
     s.kind = PreparedShape<T>::revsurf;
     s.point = narrow<T>(r.base);
     s.normal = narrow<T>(glm::normalize(r.direction));
-    s.height = narrow<T>(r.height);
+    // The cone's radius 4 − 2y/3 is 0 at y = 6: no surface above its apex (a negative radius
+    // would make a second cone there, outside the box the hierarchy gives the shape).
+    s.height = narrow<T>(r.surfer == 1 ? std::min(r.height, 6.0) : r.height);
     s.surfer = r.surfer;
     return s;
   }
