@@ -219,6 +219,23 @@ TEST(Revsurf, ConeIsHitWhereItsRadiusMeetsTheRayWithTheGradientNormal) {
   EXPECT_EQ(centre(img, 2), round_byte(9 * (2 / root13) / 10));
 }
 
+TEST(Revsurf, ConeEndsAtItsApex) {
+  // Height 9, but r(y) = 4 − 2y/3 reaches 0 at y = 6: above it there is no surface (a
+  // negative radius is none). The centre ray runs at axial height 7.5, where |r| would be 1,
+  // and goes on to the wall z = −20, 25 away: 11/25 = 0.44 -> 112.
+  const Scene s = scene_from(kCamera + R"(
+    material m { ambient 0 9 0 }
+    material wall { ambient 11 0 0 }
+    revsurf { material m surfer 1 base 1 -6.5 -15 direction 0 1 0 height 9 }
+    plane { material wall normal 0 0 1 point 0 0 -20 })");
+  const Image img = render(s);
+  EXPECT_EQ(centre(img, 0), round_byte(11.0L / 25));
+  EXPECT_EQ(centre(img, 1), 0);
+  RenderOptions course;
+  course.profile = Profile::cpsc102;
+  EXPECT_EQ(centre(render(s, course), 0), trunc_byte(11.0L / 25)) << "as the cpsc102 profile";
+}
+
 // ---------------------------------------------------------------------------------------
 // spotlight and projector
 
@@ -292,6 +309,22 @@ TEST(Transparency, ShadowRayIsFilteredOncePerTranslucentObject) {
   EXPECT_EQ(centre(img, 0), round_byte(0.72L * 0.5L));
   EXPECT_EQ(centre(img, 1), round_byte(0.72L * 0.25L));
   EXPECT_EQ(centre(img, 2), 0);
+}
+
+TEST(Transparency, ShadowRayIsFilteredOncePerObjectPastEightObjects) {
+  // Nine glass balls (filter 0.9 each) strung along the shadow ray of the previous test,
+  // each crossed in and out: 0.72 · 0.9^9 = 0.279 -> 71 (one filtered twice: 64).
+  std::string balls;
+  for (int k = 1; k <= 9; ++k)
+    balls += "sphere { material glass center " + std::to_string(1 + 0.6 * k) + " 1 " +
+             std::to_string(-5 + 0.8 * k) + " radius 0.4 }\n";
+  const Scene s = scene_from(kCamera + R"(
+    material glass { diffuse 1 transparency 0.9 }
+    material wall { diffuse 9 }
+    light { location 7 1 3 emissivity 1 }
+    plane { material wall normal 0 0 1 point 0 0 -5 })" +
+                             balls);
+  EXPECT_EQ(centre(render(s), 0), round_byte(0.72L * std::pow(0.9L, 9.0L)));
 }
 
 }  // namespace

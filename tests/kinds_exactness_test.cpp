@@ -314,5 +314,18 @@ TEST(KindsExactness, ClosestOccludedAndTransmittanceEqualTheLoopsOnRandomScenes)
   }
 }
 
+TEST(KindsExactness, ConesTallerThanTheirApexEqualTheLoop) {
+  // A cone's radius 4 − 2y/3 is 0 at y = 6; these are 10 to 30 high.
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    Rng rng(200 + seed);
+    Scene scene = kinds_scene(rng, false);
+    for (int i = 0; i < 4; ++i)
+      add(scene, EntityKind::revsurf, 0,
+          Revsurf{1, point_in_box(rng), rng.direction(), rng.in(10, 30)});
+    expect_same_answers<double>(scene, rng, 3000);
+  }
+}
+
 }  // namespace
 }  // namespace rayfarm
