@@ -134,6 +134,9 @@ std::optional<RenderOptions> resolve_options(const Scene& scene, const OptionFla
   Diagnostics diags;
   apply_options(options, scene.render, diags);
   apply_options(options, flags.as_set(), diags);
+  if (!diags.has_errors())
+    if (std::string conflict = profile_conflict(options); !conflict.empty())
+      diags.error("bad-option", conflict, {});
   for (const Diagnostic& d : diags.items())
     std::cerr << "rayfarm: error: " << (d.where.path.empty() ? "" : d.where.path + ": ")
               << d.message << "\n";

@@ -69,6 +69,8 @@ Runner add_compare(CLI::App& app) {
                   100 * r->differing_fraction, options.threshold,
                   options.neighborhood ? ", 3x3 neighbourhood" : "");
       std::printf("off_by_more_than_1 %lld\n", r->off_by_more_than_1);
+      std::printf("differing_channels %lld of %lld\n", r->differing_channels,
+                  3LL * r->width * r->height);
     }
     return kOk;
   };

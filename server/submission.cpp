@@ -114,6 +114,9 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   OptionSet query;
   for (auto& [k, v] : params) query.push_back({k, v, {0, 0, k}});
   apply_options(options, query, diags);
+  if (!diags.has_errors())
+    if (std::string conflict = profile_conflict(options); !conflict.empty())
+      diags.error("bad-option", conflict, {0, 0, "profile"});
   if (diags.has_errors()) {
     const Diagnostic* d = diags.first_error();
     ApiError e = api_error(400, "invalid_option", d->message);

@@ -28,24 +28,18 @@ std::vector<fs::path> bundled_scenes() {
   return out;
 }
 
-std::string read(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 // "scene|variant" -> hash, for every case this build renders.
 std::map<std::string, std::string> current_hashes() {
   std::map<std::string, std::string> out;
   const std::string root = RAYFARM_SOURCE_DIR "/";
   for (const fs::path& path : bundled_scenes()) {
-    const std::string text = read(path);
-    LoadedScene loaded = load_scene(text);
+    LoadedScene loaded = test::load_file(path.string());
     EXPECT_TRUE(loaded.scene) << path;
     if (!loaded.scene) continue;
     const std::string name = path.string().substr(root.size());
-    for (const char* precision : {"double", "float"})
+    // The lecture profile in both precisions (its cases keep their names: "double",
+    // "float"), and the cpsc102 profile.
+    for (const char* variant : {"double", "float", "cpsc102"})
       for (int spp : {1, 4}) {
         RenderOptions o;
         Diagnostics diags;
@@ -54,10 +48,13 @@ std::map<std::string, std::string> current_hashes() {
         o.width = 96;
         o.height = 72;
         o.spp = spp;
-        EXPECT_FALSE(apply_option(o, "precision", precision));
+        if (std::string(variant) == "cpsc102")
+          EXPECT_FALSE(apply_option(o, "profile", "cpsc102"));
+        else
+          EXPECT_FALSE(apply_option(o, "precision", variant));
         const Image image = test::render(*loaded.scene, o, 2);
         const std::string bytes(image.rgb.begin(), image.rgb.end());
-        out[name + "|" + precision + ",spp=" + std::to_string(spp)] = sha256_hex(bytes);
+        out[name + "|" + variant + ",spp=" + std::to_string(spp)] = sha256_hex(bytes);
       }
   }
   return out;

@@ -315,7 +315,8 @@ TEST(KindsExactness, ClosestOccludedAndTransmittanceEqualTheLoopsOnRandomScenes)
 }
 
 TEST(KindsExactness, ConesTallerThanTheirApexEqualTheLoop) {
-  // A cone's radius 4 − 2y/3 is 0 at y = 6; these are 10 to 30 high.
+  // A cone's radius 4 − 2y/3 is 0 at y = 6; these are 10 to 30 high, so they widen again
+  // above their apex (|r(y)|) beyond the radius 4 of their base: their boxes must hold that.
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     Rng rng(200 + seed);

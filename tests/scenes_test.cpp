@@ -20,24 +20,11 @@ std::vector<std::filesystem::path> scene_files() {
   return out;
 }
 
-std::string read(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-TEST(Scenes, ThereAreAtLeastEightModelFiles) {
-  int model_files = 0;
-  for (auto& p : scene_files()) model_files += p.extension() == ".txt";
-  EXPECT_GE(model_files, 8);
-}
-
 TEST(Scenes, EverySceneLoadsAndRendersTheSameWithAndWithoutSpecialization) {
   for (const auto& path : scene_files()) {
     SCOPED_TRACE(path.string());
-    std::string text = read(path);
-    LoadedScene loaded = load_scene(text);
+    std::string text;
+    LoadedScene loaded = test::load_file(path.string(), &text);
     ASSERT_TRUE(loaded.scene) << format_diagnostics(loaded.diags, path.string(), text);
     RenderOptions o;
     Diagnostics diags;
@@ -59,8 +46,8 @@ TEST(Scenes, EverySceneLoadsAndRendersTheSameWithAndWithoutSpecialization) {
 TEST(Scenes, BundledScenesHaveNoLintWarnings) {
   for (const auto& path : scene_files()) {
     if (path.string().find("/extreme/") != std::string::npos) continue;  // stiff on purpose
-    std::string text = read(path);
-    LoadedScene loaded = load_scene(text);
+    std::string text;
+    LoadedScene loaded = test::load_file(path.string(), &text);
     ASSERT_TRUE(loaded.scene);
     RenderOptions o;
     Diagnostics diags;

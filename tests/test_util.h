@@ -26,6 +26,36 @@ inline std::string lecture_scene() {
   return s.str();
 }
 
+// Texture files beside a scene file, as the command line reads them.
+class FilesBeside final : public ResourceResolver {
+ public:
+  explicit FilesBeside(std::string dir) : dir_(std::move(dir)) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override {
+    std::ifstream in(dir_ + "/" + path, std::ios::binary);
+    if (!in) {
+      error = "no such file";
+      return std::nullopt;
+    }
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+
+ private:
+  std::string dir_;
+};
+
+// A scene file loaded with its textures.
+inline LoadedScene load_file(const std::string& path, std::string* text_out = nullptr) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  const std::string text = s.str();
+  if (text_out) *text_out = text;
+  const FilesBeside textures(path.substr(0, path.find_last_of('/')));
+  return load_scene(text, LoadDetail::full, &textures);
+}
+
 inline Scene scene_from(const std::string& text) {
   LoadedScene loaded = load_scene(text);
   std::string errors;

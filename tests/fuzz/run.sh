@@ -14,7 +14,8 @@ for target in model_parser json_scene image_decode http_request; do
   corpus="$build/corpus-$target"
   mkdir -p "$corpus"
   case $target in
-    model_parser) cp scenes/*.txt scenes/extreme/*.txt "$corpus"/ ;;
+    model_parser) cp scenes/*.txt scenes/extreme/*.txt "$corpus"/
+      find tests/conformance/course -name "*.txt" -exec cp {} "$corpus"/ \; ;;
     json_scene) cp scenes/*.json "$corpus"/ 2>/dev/null || true ;;
     image_decode) cp tests/fuzz/corpus/image_decode/* "$corpus"/ ;;
     http_request) cp tests/fuzz/corpus/http_request/* "$corpus"/ ;;

@@ -26,6 +26,7 @@ struct CompareResult {
   long long differing_pixels = 0;
   double differing_fraction = 0;
   long long off_by_more_than_1 = 0;  // pixels with some channel more than 1 level off
+  long long differing_channels = 0;  // channels not exactly equal, whatever the threshold
 };
 
 // nullopt (with `error`) when the sizes differ.

@@ -26,6 +26,7 @@ struct RenderStats {
   int spp_target = 1;
   int tiles_done = 0;     // in the current pass
   int tiles_per_pass = 0;
+  int samples_per_pass = 1;  // the cpsc102 profile takes all of a pixel's samples at once
   double error_estimate = -1;  // standard error of the pixel means, 8-bit levels; -1: n/a
   std::vector<std::string> parts;  // pipeline parts this render runs
   std::string stop_reason;         // "spp", "target_error", "time_limit", "canceled"
@@ -38,7 +39,7 @@ struct RenderStats {
 // The version of the renderer's output: part of every content key, so a build that renders
 // any byte differently never shares cached results with one that does not. Bump it with
 // every change to pixels (tests/golden_test.cpp pins the bundled scenes' bytes).
-inline constexpr int kRenderVersion = 2;
+inline constexpr int kRenderVersion = 3;
 
 // The largest images a job accepts (the image, and with spp > 1 also 48 bytes of sums per
 // pixel, must fit in memory).

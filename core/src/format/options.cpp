@@ -255,6 +255,20 @@ void apply_options(RenderOptions& options, const OptionSet& set, Diagnostics& di
   }
 }
 
+std::string profile_conflict(const RenderOptions& o) {
+  if (o.profile != Profile::cpsc102) return {};
+  if (o.precision != Precision::f64)
+    return "precision float is not available in the cpsc102 profile (it computes in the course "
+           "program's own extended precision)";
+  if (o.highlight != Highlight::phong)
+    return "highlight blinn is not available in the cpsc102 profile (its glint is the course "
+           "program's own)";
+  if (o.bailout > 0) return "bailout is not available in the cpsc102 profile";
+  if (o.seed > 0xffffffffULL)
+    return "seed must be below 2^32 in the cpsc102 profile (it seeds glibc's random())";
+  return {};
+}
+
 std::string_view to_string(Precision p) { return kPrecisions.name(p); }
 std::string_view to_string(Highlight h) { return kHighlights.name(h); }
 std::string_view to_string(ImageFormat f) { return kFormats.name(f); }

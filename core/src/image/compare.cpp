@@ -80,6 +80,7 @@ std::optional<CompareResult> compare_images(const Image& a, const Image& b,
     sum_squares += d * d;
     sum_abs += d;
     r.max_abs = std::max(r.max_abs, d);
+    r.differing_channels += d != 0;
   }
   for (int y = 0; y < a.height; ++y) {
     for (int x = 0; x < a.width; ++x) {
@@ -123,6 +124,7 @@ nlohmann::json compare_json(const CompareResult& r, const CompareOptions& option
           {"max_abs", r.max_abs},
           {"mean_abs", r.mean_abs},
           {"differing_pixels", r.differing_pixels},
+          {"differing_channels", r.differing_channels},
           {"differing_fraction", r.differing_fraction},
           {"off_by_more_than_1", r.off_by_more_than_1},
           {"threshold", options.threshold},

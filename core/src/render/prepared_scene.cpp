@@ -93,9 +93,7 @@ struct ShapeMaker {
     s.kind = PreparedShape<T>::revsurf;
     s.point = narrow<T>(r.base);
     s.normal = narrow<T>(glm::normalize(r.direction));
-    // The cone's radius 4 − 2y/3 is 0 at y = 6: no surface above its apex (a negative radius
-    // would make a second cone there, outside the box the hierarchy gives the shape).
-    s.height = narrow<T>(r.surfer == 1 ? std::min(r.height, 6.0) : r.height);
+    s.height = narrow<T>(r.height);
     s.surfer = r.surfer;
     return s;
   }
@@ -119,7 +117,7 @@ BvhBox shape_box(const PreparedShape<T>& s) {
     return b;
   };
   if (s.kind == PreparedShape<T>::revsurf) {
-    const double r = profile_max_radius<double>(s.surfer);
+    const double r = revsurf_max_radius(s.surfer, static_cast<double>(s.height));
     const glm::dvec3 top = o + static_cast<double>(s.height) * a;
     const glm::dvec3 ext = r * glm::sqrt(glm::max(glm::dvec3(0), 1.0 - a * a));
     return box_of({o - ext, o + ext, top - ext, top + ext});

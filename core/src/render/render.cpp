@@ -101,11 +101,7 @@ class TiledRender final : public RenderJob {
     st.parts = p_.parts();
     st.stop_reason = stop_reason_;
     st.finished = finished_;
-    // Progress counts passes; a pass of several samples is progress in samples too.
-    if (p_.samples_per_pass() > 1) {
-      st.spp_target = passes_;
-      st.spp_done = passes_done_;
-    }
+    st.samples_per_pass = p_.samples_per_pass();
     return st;
   }
 
@@ -211,7 +207,8 @@ class TiledRender final : public RenderJob {
 double RenderStats::progress() const {
   if (finished) return 1.0;
   if (tiles_per_pass == 0 || spp_target == 0) return 0.0;
-  return (spp_done + static_cast<double>(tiles_done) / tiles_per_pass) / spp_target;
+  return (spp_done + static_cast<double>(tiles_done) / tiles_per_pass * samples_per_pass) /
+         spp_target;
 }
 
 std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOptions& options,
@@ -244,6 +241,10 @@ std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOpt
                  "') was not provided: textures are read with the scene";
       return nullptr;
     }
+  if (std::string conflict = profile_conflict(options); !conflict.empty()) {
+    if (error) *error = conflict;
+    return nullptr;
+  }
   const Clock::time_point t0 = Clock::now();
   const Film film{options.effective_rounding(), options.profile == Profile::cpsc102};
   if (options.profile == Profile::cpsc102) {

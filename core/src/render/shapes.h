@@ -10,6 +10,7 @@
 #include <limits>
 #include <optional>
 
+#include "geometry/revsurf.h"
 #include "rayfarm/image.h"
 #include "rayfarm/intersect.h"
 
@@ -42,27 +43,6 @@ struct PreparedShape {
   int surfer = 1;
 };
 
-// Radius r(y) of a course profile and its slope: 1 the cone 4 − 2y/3, 2 and 3 waves.
-template <class T>
-T profile_radius(int surfer, T y, T* slope = nullptr) {
-  switch (surfer) {
-    case 1:
-      if (slope) *slope = T(-2) / 3;
-      return 4 - T(2) / 3 * y;
-    case 2:
-      if (slope) *slope = T(-0.5) * std::sin(y);
-      return 1 + T(0.5) * std::cos(y);
-    default:
-      if (slope) *slope = T(0.5) * std::cos(y);
-      return 1 + T(0.5) * std::sin(y);
-  }
-}
-
-template <class T>
-T profile_max_radius(int surfer) {
-  return surfer == 1 ? T(4) : T(1.5);
-}
-
 // Frame coordinates of p on a planar shape.
 template <class T>
 inline void frame_coords(const PreparedShape<T>& s, const Vec3<T>& p, T& qx, T& qy) {
@@ -71,74 +51,17 @@ inline void frame_coords(const PreparedShape<T>& s, const Vec3<T>& p, T& qx, T& 
   qy = glm::dot(s.v, q);
 }
 
-// First t > 0 (and <= t_max) where the ray meets the surface of revolution. Leaving the
-// surface itself (`own`), the crossing it starts on is not one: only a later crossing of
-// |radial|² − r(y)² to the other side counts, so no offset is needed at any scale.
+// First t > 0 where the ray meets the surface of revolution (geometry/revsurf.h). Leaving
+// the surface itself (`own`), the crossing it starts on is not one: only a later crossing to
+// the other side counts, so no offset is needed at any scale.
 template <class T>
 T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool own) {
-  using L = long double;  // the root search needs more than float
-  const Vec3<L> a(s.normal), q = Vec3<L>(o) - Vec3<L>(s.point), dd(d);
-  const L y0 = glm::dot(q, a), dy = glm::dot(dd, a);
-  const Vec3<L> r0 = q - y0 * a, rd = dd - dy * a;
-  const L rr = glm::dot(r0, r0), rdd = glm::dot(rd, rd), r0d = glm::dot(r0, rd);
-  const L h = s.height;
-  auto f = [&](L t) {
-    const L r = profile_radius<L>(s.surfer, y0 + t * dy);
-    return rr + 2 * t * r0d + t * t * rdd - r * r;
-  };
-  L lo = 0, hi = std::numeric_limits<L>::infinity();
-  if (dy != 0) {
-    L t1 = -y0 / dy, t2 = (h - y0) / dy;
-    if (t1 > t2) std::swap(t1, t2);
-    lo = std::max(lo, t1);
-    hi = std::min(hi, t2);
-  } else if (y0 < 0 || y0 > h) {
-    return T(-1);
-  }
-  const L rmax = profile_max_radius<L>(s.surfer);
-  if (rdd > 0) {
-    const L disc = r0d * r0d - rdd * (rr - rmax * rmax);
-    if (disc < 0) return T(-1);
-    const L root = std::sqrt(disc);
-    lo = std::max(lo, (-r0d - root) / rdd);
-    hi = std::min(hi, (-r0d + root) / rdd);
-  } else if (rr > rmax * rmax) {
-    return T(-1);
-  }
-  if (!(lo < hi) || !std::isfinite(hi)) return T(-1);
-  constexpr int kSteps = 1024;
-  const L span = hi - lo;
-  L prev_t = lo, prev = f(lo);
-  bool started = !own;
-  for (int i = 1; i <= kSteps; ++i) {
-    const L t = lo + span * i / kSteps;
-    const L v = f(t);
-    // Leaving its own surface the first sample decides the side the ray is on.
-    if (!started) {
-      started = true;
-      prev_t = t;
-      prev = v;
-      continue;
-    }
-    if (t > 0 && (prev <= 0) != (v <= 0)) {
-      L a0 = std::max<L>(prev_t, 0), b0 = t, fa = f(a0);
-      for (int it = 0; it < 96 && a0 < b0; ++it) {
-        const L mid = (a0 + b0) / 2;
-        if (mid <= a0 || mid >= b0) break;
-        const L fm = f(mid);
-        if ((fa <= 0) == (fm <= 0)) {
-          a0 = mid;
-          fa = fm;
-        } else {
-          b0 = mid;
-        }
-      }
-      if (b0 > 0) return static_cast<T>(b0);
-    }
-    prev_t = t;
-    prev = v;
-  }
-  return T(-1);
+  const glm::dvec3 a(s.normal), q = glm::dvec3(o) - glm::dvec3(s.point), dd(d);
+  const double y0 = glm::dot(q, a), dy = glm::dot(dd, a);
+  const glm::dvec3 r0 = q - y0 * a, rd = dd - dy * a;
+  const RevsurfRay ray{y0, dy, glm::dot(r0, r0), glm::dot(r0, rd), glm::dot(rd, rd)};
+  const double t = revsurf_first_crossing(s.surfer, static_cast<double>(s.height), ray, own);
+  return t > 0 ? static_cast<T>(t) : T(-1);
 }
 
 // Where a ray leaving `from` meets shape `index` (its object number), or a value not > 0.
@@ -176,10 +99,10 @@ Vec3<T> shape_normal(const PreparedShape<T>& s, const Vec3<T>& p) {
   if (s.kind != PreparedShape<T>::revsurf) return s.normal;
   const Vec3<T> q = p - s.point;
   const T y = glm::dot(q, s.normal);
-  T slope;
-  const T r = profile_radius<T>(s.surfer, y, &slope);
+  double slope;
+  const T r = static_cast<T>(revsurf_radius(s.surfer, static_cast<double>(y), &slope));
   // The gradient of |radial|² − r², halved.
-  const Vec3<T> n = (q - y * s.normal) - (r * slope) * s.normal;
+  const Vec3<T> n = (q - y * s.normal) - (r * static_cast<T>(slope)) * s.normal;
   const T len = glm::length(n);
   return len > 0 ? n / len : s.normal;
 }
@@ -194,10 +117,13 @@ Vec3<T> shape_texel(const PreparedShape<T>& s, const Vec3<T>& p) {
   frame_coords(s, p, qx, qy);
   long long tx, ty;
   if (s.mode == 0) {
-    tx = static_cast<long long>(std::floor(qx / s.width * img.width));
-    ty = static_cast<long long>(std::floor(qy / s.height * img.height));
-    tx = std::clamp<long long>(tx, 0, img.width - 1);
-    ty = std::clamp<long long>(ty, 0, img.height - 1);
+    // Clamped as floating point first: a coordinate may be huge or not finite.
+    auto index = [](T q, T size, int n) {
+      const T i = std::floor(q / size * static_cast<T>(n));
+      return i > 0 ? (i < static_cast<T>(n - 1) ? static_cast<long long>(i) : n - 1LL) : 0LL;
+    };
+    tx = index(qx, s.width, img.width);
+    ty = index(qy, s.height, img.height);
   } else {
     auto wrap = [](T q, T size, int n) {
       const T k = std::floor(q / size);

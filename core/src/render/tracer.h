@@ -334,27 +334,28 @@ class Tracer {
     if (s.inside) s.n = -s.n;
     s.m = &s_.materials[material];
     const PreparedMaterial<T>* colours = s.m;
-    if (tiles && !on_own_square(*tiles, p)) {
-      if (tiles->world_xz) {  // the 2009 form alternates the ambient colour only
-        s.ambient = s_.materials[tiles->alt_material].ambient;
+    if (tiles) {
+      const bool odd = tile_is_odd(*tiles, p);
+      if (tiles->world_xz) {  // 2009: odd squares take the other ambient colour, nothing else
+        s.ambient = (odd ? s_.materials[tiles->alt_material] : *s.m).ambient;
         s.diffuse = s.m->diffuse;
         return s;
       }
-      colours = &s_.materials[tiles->alt_material];
+      if (!odd) colours = &s_.materials[tiles->alt_material];  // odd: the plane's own
     }
     s.ambient = colours->ambient * texel;
     s.diffuse = colours->diffuse * texel;
     return s;
   }
 
-  // The course's tile rule: odd squares have the plane's own material; in the 2009 form the
-  // even ones (the foreground), as in the cpsc102 profile.
-  static bool on_own_square(const PreparedPlane<T>& pl, const Vec3<T>& p) {
+  // Whether the square at p has an odd index sum (the course's rule: in the plane's frame,
+  // or for the 2009 form on world x and z offset by 10000).
+  static bool tile_is_odd(const PreparedPlane<T>& pl, const Vec3<T>& p) {
     T ix, iy;
     if (pl.world_xz) {
       ix = std::floor((p.x + 10000) / pl.tile_w);
       iy = std::floor((p.z + 10000) / pl.tile_h);
-      return std::fmod(ix + iy, T(2)) == 0;
+      return std::fmod(ix + iy, T(2)) != 0;
     }
     ix = std::floor(glm::dot(pl.u, p) / pl.tile_w);
     iy = std::floor(glm::dot(pl.v, p) / pl.tile_h);

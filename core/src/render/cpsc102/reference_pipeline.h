@@ -20,7 +20,7 @@ class ReferencePipeline {
   explicit ReferencePipeline(RefScene scene) : s_(std::move(scene)), grid_(s_.width, s_.height) {
     if (s_.spp <= 1) return;
     // One run through the stream: the state where each tile's part of each row begins.
-    GlibcRandom random;
+    GlibcRandom random(s_.seed);
     starts_.reserve(static_cast<size_t>(s_.height) * grid_.tiles_x);
     for (int y = 0; y < s_.height; ++y)
       for (int tx = 0; tx < grid_.tiles_x; ++tx) {

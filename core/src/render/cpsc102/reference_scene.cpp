@@ -130,6 +130,8 @@ RefScene prepare_reference(const Scene& scene, const RenderOptions& options, int
   s.max_dist = options.effective_max_dist();
   s.max_depth = options.effective_max_depth();
   s.spp = options.spp;
+  s.seed = static_cast<std::uint32_t>(options.seed);
+  s.shadows = options.shadows;
   for (const Material& m : scene.materials) s.materials.push_back(material_of(m));
   const Builder build{scene};
   for (const Object& obj : scene.objects) {

@@ -2,6 +2,7 @@
 // file order, unit normals and plane frames computed with its arithmetic (x87.h).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,8 @@ struct RefScene {
   double max_dist = 20;
   int max_depth = 64;
   int spp = 1;
+  std::uint32_t seed = 1;  // of the jitter stream (glibc's srandom; 0 is taken as 1, as glibc does)
+  bool shadows = true;
   std::vector<RefMaterial> materials;
   std::vector<RefObject> objects;
   std::vector<RefLight> lights;

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "render/cpsc102/revsurf_ref.h"
+#include "util/saturate.h"
 
 namespace rayfarm::cpsc102 {
 namespace {
@@ -13,8 +14,8 @@ namespace {
 // the image over the window, bottom row of the file at qy = 0. As in the program, an index
 // one past the end reads on in memory; it is kept inside the image here.
 const std::uint8_t* texel(const Image& image, double qx, double qy, double w, double h) {
-  const int tx = static_cast<int>(static_cast<X>(qx) / w * image.width);
-  const int ty = static_cast<int>(static_cast<X>(qy) / h * image.height);
+  const int tx = saturating_trunc(static_cast<X>(qx) / w * image.width);
+  const int ty = saturating_trunc(static_cast<X>(qy) / h * image.height);
   long long index = static_cast<long long>(image.height - 1 - ty) * image.width + tx;
   index = std::clamp<long long>(index, 0, static_cast<long long>(image.width) * image.height - 1);
   return image.rgb.data() + 3 * index;
@@ -113,16 +114,16 @@ void ReferenceTracer::surface(int k, const V3& p, V3& ambient, V3& diffuse) cons
   if (o.kind == RefObject::tiled) {
     int ix, iy;
     if (o.world_xz) {
-      ix = static_cast<int>((static_cast<X>(p.x) + 10000) / o.width);
-      iy = static_cast<int>((static_cast<X>(p.z) + 10000) / o.height);
+      ix = saturating_trunc((static_cast<X>(p.x) + 10000) / o.width);
+      iy = saturating_trunc((static_cast<X>(p.z) + 10000) / o.height);
       // 2009: even squares are the foreground; only the ambient colour alternates.
       ambient = (ix + iy) % 2 == 0 ? m->ambient : s_.materials[o.alt_material].ambient;
       diffuse = m->diffuse;
       return;
     }
     const double qx = dot(o.frame.row0, p), qy = dot(o.frame.row1, p);
-    ix = static_cast<int>(static_cast<X>(qx) / o.width + 10000);
-    iy = static_cast<int>(static_cast<X>(qy) / o.height + 10000);
+    ix = saturating_trunc(static_cast<X>(qx) / o.width + 10000);
+    iy = saturating_trunc(static_cast<X>(qy) / o.height + 10000);
     if ((ix + iy) % 2 == 0) m = &s_.materials[o.alt_material];
     ambient = m->ambient;
     diffuse = m->diffuse;
@@ -141,8 +142,10 @@ void ReferenceTracer::surface(int k, const V3& p, V3& ambient, V3& diffuse) cons
       // One texel per pixel of world size, repeated.
       const double px = R(static_cast<X>(s_.world_width) / s_.width);
       const double py = R(static_cast<X>(s_.world_height) / s_.height);
-      const int tx = static_cast<int>(static_cast<X>(qx) / px) % img.width;
-      const int ty = static_cast<int>(static_cast<X>(qy) / py) % img.height;
+      int tx = saturating_trunc(static_cast<X>(qx) / px) % img.width;
+      int ty = saturating_trunc(static_cast<X>(qy) / py) % img.height;
+      if (tx < 0) tx += img.width;  // only off the window, where no hit is
+      if (ty < 0) ty += img.height;
       t = img.rgb.data() + 3 * (static_cast<long long>(img.height - 1 - ty) * img.width + tx);
     }
     ambient = filtered(ambient, t);
@@ -173,14 +176,19 @@ V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_
     if (!light.texture || light.texture->width == 0) return {};
     e = filtered(e, texel(*light.texture, qx, qy, light.width, light.height));
   }
-  // The shadow ray walks on through translucent objects, each filtering the light.
-  ++counts.shadow;
+  // The shadow ray walks on through translucent objects, each filtering the light. (With
+  // shadows off no search runs, so no hit point is overwritten by one either.)
   V3 from = p;
   int skip = k;
   double remaining = d;
   double d_diffuse = d;
   const int last = static_cast<int>(s_.objects.size()) - 1;
-  for (;;) {
+  if (s_.shadows) ++counts.shadow;
+  // Each step passes one object, which a straight line meets a few times at most; coincident
+  // translucent surfaces could otherwise hand the ray back and forth without end.
+  const int max_steps = 4 * static_cast<int>(s_.objects.size()) + 8;
+  for (int step = 0; s_.shadows; ++step) {
+    if (step == max_steps) return {};
     double t;
     const int m = closest(from, l, skip, t);
     if (m < 0 || !(t < remaining)) break;
