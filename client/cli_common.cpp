@@ -113,12 +113,28 @@ std::optional<std::string> FileResolver::read(const std::string& path, std::stri
   return bytes.str();
 }
 
+FileResolver FileResolver::beside(const std::string& scene_path) {
+  return FileResolver(scene_path == "-" ? std::filesystem::path(".")
+                                        : std::filesystem::path(scene_path).parent_path());
+}
+
+std::optional<std::string> RecordingResolver::read(const std::string& path,
+                                                   std::string& error) const {
+  auto bytes = inner_.read(path, error);
+  if (bytes) files_[path] = *bytes;
+  return bytes;
+}
+
 std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
                                         bool print_warnings, LoadDetail detail, bool textures) {
-  // Textures are files beside the model file (beside the working directory for stdin).
-  const FileResolver files(path == "-" ? std::filesystem::path(".")
-                                       : std::filesystem::path(path).parent_path());
-  LoadedScene loaded = load_scene(text, detail, textures ? &files : nullptr);
+  const FileResolver files = FileResolver::beside(path);
+  return load_checked(path, text, print_warnings, detail, textures ? &files : nullptr);
+}
+
+std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
+                                        bool print_warnings, LoadDetail detail,
+                                        const ResourceResolver* textures) {
+  LoadedScene loaded = load_scene(text, detail, textures);
   for (const Diagnostic& d : loaded.diags.items())
     if (d.severity == Severity::error || print_warnings)
       std::cerr << format_diagnostic(d, display_name(path), text);

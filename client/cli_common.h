@@ -34,10 +34,25 @@ struct OptionFlags {
 class FileResolver final : public ResourceResolver {
  public:
   explicit FileResolver(std::filesystem::path base) : base_(std::move(base)) {}
+  // Beside the scene file `scene_path` (beside the working directory for "-", stdin).
+  static FileResolver beside(const std::string& scene_path);
   std::optional<std::string> read(const std::string& path, std::string& error) const override;
 
  private:
   std::filesystem::path base_;
+};
+
+// Reads through another resolver and keeps each file it read, by the path the scene writes:
+// what `render --server` uploads with the scene, read exactly as a local render reads it.
+class RecordingResolver final : public ResourceResolver {
+ public:
+  explicit RecordingResolver(const ResourceResolver& inner) : inner_(inner) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override;
+  const std::map<std::string, std::string>& files() const { return files_; }
+
+ private:
+  const ResourceResolver& inner_;
+  mutable std::map<std::string, std::string> files_;
 };
 
 // Loads and checks a scene file, printing diagnostics. nullopt when it has errors. With
@@ -45,6 +60,10 @@ class FileResolver final : public ResourceResolver {
 std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
                                         bool print_warnings, LoadDetail detail = LoadDetail::scene,
                                         bool textures = true);
+// The same, with the texture files read through `textures` (none read when null).
+std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
+                                        bool print_warnings, LoadDetail detail,
+                                        const ResourceResolver* textures);
 
 // The scene's own options, then the command line's; errors printed. nullopt on error.
 std::optional<RenderOptions> resolve_options(const Scene& scene, const OptionFlags& flags);

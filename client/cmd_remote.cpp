@@ -5,6 +5,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <thread>
 
@@ -161,7 +162,8 @@ std::optional<Remote> remote_for(const IdArgs& args) {
 
 }  // namespace
 
-int remote_render(const std::string& scene_path, const std::string& text, const std::string& out,
+int remote_render(const std::string& scene_path, const std::string& text,
+                  const std::map<std::string, std::string>& textures, const std::string& out,
                   const OptionSet& options, const std::string& format, const Remote& remote,
                   bool quiet) {
   std::string query;
@@ -170,7 +172,17 @@ int remote_render(const std::string& scene_path, const std::string& text, const 
     query += (query.empty() ? "?" : "&") + v.name + "=" + url_encode(v.value);
   }
   auto client = remote.client();
-  auto res = client->Post("/render" + query, remote.headers(), text, "text/plain");
+  auto post = [&] {
+    if (textures.empty())
+      return client->Post("/render" + query, remote.headers(), text, "text/plain");
+    // Part names are the paths exactly as the scene writes them (SPEC §5).
+    httplib::MultipartFormDataItems parts = {{"scene", text, "scene", "text/plain"}};
+    for (const auto& [path, bytes] : textures)
+      parts.push_back({path, bytes, std::filesystem::path(path).filename().string(),
+                       "application/octet-stream"});
+    return client->Post("/render" + query, remote.headers(), parts);
+  };
+  auto res = post();
   if (!res || res->status != 202)
     return report_http_error(res, "submitting to " + remote.url, display_name(scene_path), &text);
   auto body = nlohmann::json::parse(res->body, nullptr, false);

@@ -84,8 +84,14 @@ Runner add_render(CLI::App& app) {
     if (!text) return kInputError;
     std::string out_path = args->out.empty() ? default_output(args->scene) : args->out;
     if (std::string url = server_url(args->server); !url.empty()) {
+      // Checked here, its textures read as a local render reads them: the server has no
+      // access to this machine's files, so they are uploaded with the scene.
+      const FileResolver files = FileResolver::beside(args->scene);
+      const RecordingResolver textures(files);
+      if (!load_checked(args->scene, *text, false, LoadDetail::scene, &textures))
+        return kInputError;
       ImageFormat format = format_for(out_path, args->flags);
-      return remote_render(args->scene, *text, out_path, args->flags.as_set(),
+      return remote_render(args->scene, *text, textures.files(), out_path, args->flags.as_set(),
                            std::string(to_string(format)), Remote{url, server_token(args->token)},
                            args->quiet);
     }

@@ -1,6 +1,7 @@
 // Talking to rayfarmd: submit, follow, fetch, cancel (SPEC §5, §6).
 #pragma once
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -31,7 +32,9 @@ int report_http_error(const httplib::Result& result, const std::string& what,
                       const std::string& scene_name = "", const std::string* scene_text = nullptr);
 
 // `rayfarm render --server`: submits, shows progress, saves the image; Ctrl-C cancels.
-int remote_render(const std::string& scene_path, const std::string& text, const std::string& out,
+// `textures` (path as the scene writes it -> bytes) go up as multipart parts with the scene.
+int remote_render(const std::string& scene_path, const std::string& text,
+                  const std::map<std::string, std::string>& textures, const std::string& out,
                   const OptionSet& options, const std::string& format, const Remote& remote,
                   bool quiet);
 

@@ -1,4 +1,4 @@
-// ApiError's JSON body and the plain constructor.
+// ApiError's JSON body and its constructors.
 #include "api_error.h"
 
 #include <utility>
@@ -10,6 +10,34 @@ ApiError api_error(int status, std::string code, std::string message) {
   e.status = status;
   e.code = std::move(code);
   e.message = std::move(message);
+  return e;
+}
+
+ApiError limit_error(const std::string& limit, const std::string& message) {
+  ApiError e = api_error(422, "limit_exceeded", message);
+  e.limit = limit;
+  return e;
+}
+
+ApiError scene_error(const Diagnostics& diags) {
+  const Diagnostic* first = diags.first_error();
+  ApiError e = api_error(400, "invalid_scene", first ? first->message : "invalid scene");
+  if (first) {
+    e.line = first->where.line;
+    e.column = first->where.column;
+    e.path = first->where.path;
+  }
+  e.details = nlohmann::json::array();
+  for (const Diagnostic& d : diags.items()) {
+    if (d.severity != Severity::error) continue;
+    nlohmann::json item = {{"code", d.code}, {"message", d.message}};
+    if (d.where.line > 0) {
+      item["line"] = d.where.line;
+      item["column"] = d.where.column;
+    }
+    if (!d.where.path.empty()) item["path"] = d.where.path;
+    e.details.push_back(item);
+  }
   return e;
 }
 

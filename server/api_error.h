@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rayfarm/diagnostic.h"
+
 namespace rayfarm::server {
 
 struct ApiError {
@@ -24,5 +26,9 @@ struct ApiError {
 };
 
 ApiError api_error(int status, std::string code, std::string message);
+// 422 over the named limit.
+ApiError limit_error(const std::string& limit, const std::string& message);
+// 400 invalid_scene: the first error's place, and every error.
+ApiError scene_error(const Diagnostics& diags);
 
 }  // namespace rayfarm::server

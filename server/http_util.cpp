@@ -1,6 +1,7 @@
 // Responses, query parameters and client identity shared by the routes.
 #include "http_util.h"
 
+#include <algorithm>
 #include <cmath>
 #include <mutex>
 
@@ -70,6 +71,17 @@ bool param_true(const Request& req, const char* name) {
   if (!req.has_param(name)) return false;
   std::string v = req.get_param_value(name);
   return v == "1" || v == "true" || v == "yes";
+}
+
+ApiError texture_parts(const Request& req, std::initializer_list<std::string_view> own,
+                       TextureFiles& out) {
+  for (const auto& [name, part] : req.files) {
+    if (std::find(own.begin(), own.end(), name) != own.end()) continue;
+    if (!out.emplace(name, part.content).second)
+      return api_error(400, "duplicate_part",
+                       "part '" + name.substr(0, 200) + "' is sent more than once");
+  }
+  return {};
 }
 
 std::string bearer_token(const Request& req) {

@@ -4,7 +4,9 @@
 
 #include <httplib.h>
 
+#include <initializer_list>
 #include <string>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
@@ -26,6 +28,11 @@ bool send_result(Service& service, const httplib::Request& req, httplib::Respons
 bool wants_ppm(const httplib::Request& req, const Job& job);
 // ?NAME=1, true or yes.
 bool param_true(const httplib::Request& req, const char* name);
+
+// The parts of a multipart request that are not the route's own (`own`): texture files, by
+// the path the scene names them with. A name sent twice is a 400 (which file was meant?).
+ApiError texture_parts(const httplib::Request& req, std::initializer_list<std::string_view> own,
+                       TextureFiles& out);
 
 // The token of an `Authorization: Bearer` header; empty when there is none.
 std::string bearer_token(const httplib::Request& req);

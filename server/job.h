@@ -7,6 +7,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -47,6 +48,9 @@ struct Job {
   int attempts = 0;  // renders started (a crash loop is failed after a few)
   bool cache_hit = false;
   std::string image_name;  // where the result is kept (the cache key, or the id)
+  // SHA-256 of each of scene->textures' files: kept in the results directory, and named by
+  // the record, until the job is final. Empty for a cache hit.
+  std::vector<std::string> textures;
   RenderStats stats;                       // last known
   std::uint64_t version = 0;               // bumped on every change (event streams)
   std::chrono::steady_clock::time_point run_start{};

@@ -1,5 +1,6 @@
 // Restart recovery: the jobs in the results directory back in the table; unfinished ones are
-// queued again (failed after a few attempts), done ones whose image has expired are dropped.
+// queued again with their uploaded textures (failed after a few attempts), done ones whose
+// image has expired are dropped, texture files no queued job names are deleted.
 #include <algorithm>
 
 #include "rayfarm/load.h"
@@ -63,9 +64,13 @@ void Service::restore() {
                      " times; it will not be retried";
         job->finished_ms = now_ms();
       } else {
-        LoadedScene loaded = load_scene(s.scene_text, LoadDetail::scene);
-        if (loaded.scene) {
-          job->scene = std::make_shared<const Scene>(std::move(*loaded.scene));
+        std::vector<std::string> textures;
+        if (r.contains("textures") && r["textures"].is_array())
+          for (auto& t : r["textures"])
+            if (t.is_string()) textures.push_back(t.get<std::string>());
+        job->scene = reload_scene(s.scene_text, textures);
+        if (job->scene) {
+          job->textures = std::move(textures);
           state = JobState::queued;
           rerun = true;
         } else {
@@ -81,10 +86,12 @@ void Service::restore() {
       job->sequence = ++sequence_;
       jobs_[job->id] = job;
       ++image_refs_[job->image_name];
+      for (const std::string& t : job->textures) ++texture_refs_[t];
     }
     if (!rerun && state == JobState::failed) persist(*job);
     if (rerun) scheduler_->submit(job);
   }
+  sweep_textures();  // of jobs that ended, or were never accepted, when the process died
 }
 
 }  // namespace rayfarm::server

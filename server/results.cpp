@@ -66,6 +66,9 @@ void Service::on_finished(Job& job, RenderJob* render) {
   }
   job.changed.notify_all();
   persist(job);
+  // After the final record is on disk: a crash in between leaves files the next start sweeps,
+  // never a queued record whose textures are gone.
+  if (state != JobState::queued) release_textures(job);
   if (state != JobState::queued)
     metrics_.render_finished(std::string(to_string(state)), st.render_ms / 1000, st.primary_rays,
                              st.shadow_rays, st.reflection_rays);

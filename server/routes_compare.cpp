@@ -1,5 +1,6 @@
-// POST /compare: two uploaded images, or a scene rendered here against an uploaded image,
-// compared pixel by pixel; the numbers as JSON or, with ?diff=1, the difference image.
+// POST /compare: two uploaded images, or a scene (with its textures) rendered here against an
+// uploaded image, compared pixel by pixel; the numbers as JSON or, with ?diff=1, the difference
+// image.
 #include <chrono>
 #include <cmath>
 #include <mutex>
@@ -46,7 +47,10 @@ void post_compare(Service& svc, const Request& req, Response& res) {
     Params params;
     for (auto& [k, v] : req.params)
       if (k != "threshold" && k != "neighborhood" && k != "diff") params.emplace_back(k, v);
-    Submitted sub = svc.submit(req.get_file_value("scene").content, params, client_of(req));
+    TextureFiles textures;
+    if (ApiError e = texture_parts(req, {"scene", "image"}, textures)) return send_error(res, e);
+    Submitted sub =
+        svc.submit(req.get_file_value("scene").content, params, client_of(req), textures);
     if (sub.error) return send_error(res, sub.error);
     Job& job = *sub.job;
     job_id = job.id;

@@ -1,5 +1,5 @@
-// POST /render: a scene from the body, a multipart 'scene' part or ?sample=NAME, queued, and
-// with ?wait=1 answered with the result once the job ends.
+// POST /render: a scene from the body, a multipart 'scene' part (its textures in the other
+// parts) or ?sample=NAME, queued, and with ?wait=1 answered with the result once the job ends.
 #include <chrono>
 #include <fstream>
 #include <mutex>
@@ -60,6 +60,7 @@ bool answer_when_final(Service& svc, const Request& req, Response& res, Job& job
 
 void post_render(Service& svc, const Request& req, Response& res) {
   std::string text;
+  TextureFiles textures;
   if (req.has_param("sample")) {
     const Sample* sample = svc.sample(req.get_param_value("sample"));
     if (!sample) {
@@ -71,10 +72,12 @@ void post_render(Service& svc, const Request& req, Response& res) {
     }
     std::ifstream in(sample->path, std::ios::binary);
     text.assign(std::istreambuf_iterator<char>(in), {});
+    textures = sample->textures;
   } else if (req.is_multipart_form_data()) {
     if (!req.has_file("scene"))
       return send_error(res, 400, "missing_scene", "multipart upload without a 'scene' part");
     text = req.get_file_value("scene").content;
+    if (ApiError e = texture_parts(req, {"scene"}, textures)) return send_error(res, e);
   } else {
     text = req.body;
   }
@@ -84,7 +87,7 @@ void post_render(Service& svc, const Request& req, Response& res) {
   Params params;
   for (auto& [k, v] : req.params)
     if (!kControlParams.count(k)) params.emplace_back(k, v);
-  Submitted sub = svc.submit(text, params, client_of(req));
+  Submitted sub = svc.submit(text, params, client_of(req), textures);
   if (sub.error) return send_error(res, sub.error);
   auto& job = *sub.job;
 

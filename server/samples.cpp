@@ -1,5 +1,5 @@
 // The sample scenes offered by GET /samples and /render?sample=NAME: each .txt or .json file
-// of the samples directory that loads, described by its first comment.
+// of the samples directory that loads (with its textures), described by its first comment.
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -17,6 +17,27 @@ std::string read_text(const fs::path& p) {
   s << in.rdbuf();
   return s.str();
 }
+
+// A sample's textures: files of the samples directory (beneath it, never outside), kept as the
+// uploads of a request for it.
+class BundleFiles final : public ResourceResolver {
+ public:
+  explicit BundleFiles(fs::path dir) : dir_(std::move(dir)) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override {
+    const fs::path p(path);
+    std::error_code ec;
+    if (p.is_absolute() || std::find(p.begin(), p.end(), "..") != p.end() ||
+        !fs::is_regular_file(dir_ / p, ec)) {
+      error = "not a file of the samples directory";
+      return std::nullopt;
+    }
+    return files[path] = read_text(dir_ / p);
+  }
+  mutable TextureFiles files;
+
+ private:
+  fs::path dir_;
+};
 
 }  // namespace
 
@@ -46,8 +67,9 @@ void Service::load_samples() {
       while (!description.empty() && description.front() == ' ') description.erase(0, 1);
       break;
     }
-    if (!load_scene(text, LoadDetail::scene).scene) continue;  // only scenes that render are offered
-    samples_.push_back({name, description, e.path()});
+    const BundleFiles textures(dir);
+    if (!load_scene(text, LoadDetail::scene, &textures).scene) continue;  // only what renders
+    samples_.push_back({name, description, e.path(), std::move(textures.files)});
   }
   std::sort(samples_.begin(), samples_.end(), [](auto& a, auto& b) { return a.name < b.name; });
 }

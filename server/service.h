@@ -25,6 +25,7 @@
 #include "scheduler.h"
 #include "settings.h"
 #include "store.h"
+#include "textures.h"
 
 namespace rayfarm::server {
 
@@ -39,6 +40,7 @@ struct Sample {
   std::string name;
   std::string description;
   std::filesystem::path path;
+  TextureFiles textures;  // the bundle's files beside it, read at start (requests name none)
 };
 
 class Service {
@@ -50,7 +52,9 @@ class Service {
 
   // Checks the scene and options against the format and the limits, answers from the cache
   // when it can, and otherwise queues the job; the job is on disk before this returns.
-  Submitted submit(const std::string& scene_text, const Params& options, const std::string& client);
+  // `textures`: the files the scene names, by the path it writes (SPEC §5).
+  Submitted submit(const std::string& scene_text, const Params& options, const std::string& client,
+                   const TextureFiles& textures = {});
 
   std::shared_ptr<Job> find(const std::string& id) const;
   std::vector<std::shared_ptr<Job>> jobs_of(const std::string& client, size_t limit) const;
@@ -88,6 +92,14 @@ class Service {
 
  private:
   ApiError check_limits(const Scene& scene, const RenderOptions& options, int width, int height);
+  // textures.cpp
+  ApiError check_uploads(const TextureFiles& files) const;
+  ApiError resolve_uploads(Scene& scene, const TextureFiles& files) const;
+  void keep_textures(const Job& job, const Scene& scene, const TextureFiles& files);
+  void release_textures(Job& job);
+  std::shared_ptr<const Scene> reload_scene(const std::string& text,
+                                            const std::vector<std::string>& hashes);
+  void sweep_textures();
   void restore();
   void on_finished(Job& job, RenderJob* render);
   void persist(const Job& job);
@@ -105,6 +117,8 @@ class Service {
   // How many kept (or being submitted) jobs name each image: expiry deletes an image only when
   // none does, without scanning the table under its lock.
   std::unordered_map<std::string, int> image_refs_;
+  // How many unfinished jobs need each texture file in the results directory (by its hash).
+  std::unordered_map<std::string, int> texture_refs_;
   std::uint64_t sequence_ = 0;
 
   std::vector<Sample> samples_;

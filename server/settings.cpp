@@ -33,6 +33,9 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   add("--max-depth", s.max_depth, "largest max_depth")->check(CLI::Range(0, 100000));
   add("--max-objects", s.max_objects, "most spheres and planes in a scene")->check(CLI::Range(0, 100000000));
   add("--max-lights", s.max_lights, "most lights in a scene")->check(CLI::Range(0, 1000000));
+  add("--max-textures", s.max_textures, "most texture files uploaded with one scene")
+      ->check(CLI::Range(0, 100000));
+  add("--max-texture-bytes", s.max_texture_bytes, "largest uploaded texture file");
   add("--max-work", s.max_work, "most pixels x spp x (max_depth + 1) in one job")
       ->check(CLI::Range(1.0, 1e18));
   add("--job-timeout", s.job_timeout, "seconds a job may render (0: no limit)")

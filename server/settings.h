@@ -21,6 +21,8 @@ struct Settings {
   int max_depth = 64;
   int max_objects = 1000000;
   int max_lights = 1000;
+  int max_textures = 16;                          // texture files uploaded with one scene
+  std::uint64_t max_texture_bytes = 8ULL << 20;  // one texture file's size
   double max_work = 8e9;  // pixels x spp x (max_depth + 1): the most ray paths a job may ask for
   double job_timeout = 600;  // seconds; 0: none
   std::string results_dir;   // empty: keep results in memory only

@@ -44,8 +44,9 @@ ResultStore::ResultStore(fs::path dir) : dir_(std::move(dir)) {
   if (dir_.empty()) return;
   fs::create_directories(dir_ / "jobs");
   fs::create_directories(dir_ / "images");
+  fs::create_directories(dir_ / "textures");
   // Temp files of a write that a crash interrupted.
-  for (auto& sub : {dir_ / "jobs", dir_ / "images"})
+  for (auto& sub : {dir_ / "jobs", dir_ / "images", dir_ / "textures"})
     for (auto& e : fs::directory_iterator(sub))
       if (e.path().filename().string().find(".tmp") != std::string::npos) fs::remove(e.path());
 }
@@ -119,6 +120,34 @@ void ResultStore::remove_image(const std::string& name) {
   fs::remove(dir_ / "images" / (name + ".png"), ec);
 }
 
+void ResultStore::save_texture(const std::string& hash, std::string_view bytes) {
+  if (!enabled() || !safe_name(hash)) return;
+  std::error_code ec;
+  // Content-addressed: a file already there holds these very bytes.
+  if (!fs::exists(dir_ / "textures" / hash, ec)) write_atomically(dir_ / "textures" / hash, bytes);
+}
+
+std::optional<std::string> ResultStore::load_texture(const std::string& hash) const {
+  if (!enabled() || !safe_name(hash)) return std::nullopt;
+  std::error_code ec;
+  if (!fs::exists(dir_ / "textures" / hash, ec)) return std::nullopt;
+  return read_file(dir_ / "textures" / hash);
+}
+
+void ResultStore::remove_texture(const std::string& hash) {
+  if (!enabled() || !safe_name(hash)) return;
+  std::error_code ec;
+  fs::remove(dir_ / "textures" / hash, ec);
+}
+
+std::vector<std::string> ResultStore::texture_names() const {
+  std::vector<std::string> out;
+  if (enabled())
+    for (auto& e : fs::directory_iterator(dir_ / "textures"))
+      if (safe_name(e.path().filename().string())) out.push_back(e.path().filename().string());
+  return out;
+}
+
 std::vector<ResultStore::Stored> ResultStore::load_jobs() const {
   std::vector<Stored> out;
   if (!enabled()) return out;
@@ -150,28 +179,31 @@ nlohmann::json job_record(const Job& job) {
   std::lock_guard lock(job.mu);
   nlohmann::json options = nlohmann::json::object();
   for (auto& [k, v] : option_pairs(job.options)) options[k] = v;
-  return {{"id", job.id},
-          {"client", job.client},
-          {"state", to_string(job.state)},
-          {"options", options},
-          {"cache_key", job.cache_key},
-          {"image_name", job.image_name},
-          {"created_ms", job.created_ms},
-          {"started_ms", job.started_ms},
-          {"finished_ms", job.finished_ms},
-          {"attempts", job.attempts},
-          {"error", job.error},
-          {"error_code", job.error_code},
-          {"width", job.width},
-          {"height", job.height},
-          {"stats",
-           {{"primary", job.stats.primary_rays},
-            {"shadow", job.stats.shadow_rays},
-            {"reflection", job.stats.reflection_rays},
-            {"render_ms", job.stats.render_ms},
-            {"spp_done", job.stats.spp_done},
-            {"error_estimate", job.stats.error_estimate},
-            {"parts", job.stats.parts}}}};
+  nlohmann::json record = {{"id", job.id},
+                           {"client", job.client},
+                           {"state", to_string(job.state)},
+                           {"options", options},
+                           {"cache_key", job.cache_key},
+                           {"image_name", job.image_name},
+                           {"created_ms", job.created_ms},
+                           {"started_ms", job.started_ms},
+                           {"finished_ms", job.finished_ms},
+                           {"attempts", job.attempts},
+                           {"error", job.error},
+                           {"error_code", job.error_code},
+                           {"width", job.width},
+                           {"height", job.height},
+                           {"stats",
+                            {{"primary", job.stats.primary_rays},
+                             {"shadow", job.stats.shadow_rays},
+                             {"reflection", job.stats.reflection_rays},
+                             {"render_ms", job.stats.render_ms},
+                             {"spp_done", job.stats.spp_done},
+                             {"error_estimate", job.stats.error_estimate},
+                             {"parts", job.stats.parts}}}};
+  // Only a job that may still render needs its textures; the files go when it ends.
+  if (!is_final(job.state) && !job.textures.empty()) record["textures"] = job.textures;
+  return record;
 }
 
 }  // namespace rayfarm::server

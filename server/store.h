@@ -2,6 +2,8 @@
 // (temp file, fsync, rename), so a restart finds every accepted job and every result.
 //   DIR/jobs/ID.json    the job record      DIR/jobs/ID.scene  the scene as submitted
 //   DIR/images/NAME.png the result (NAME: the content key, or the job id)
+//   DIR/textures/HASH   an uploaded texture file, named by the SHA-256 of its bytes (never by
+//                       the path the scene gives it), while an unfinished job needs it
 #pragma once
 
 #include <filesystem>
@@ -30,6 +32,10 @@ class ResultStore {
   bool has_image(const std::string& name) const;
   void remove_job(const std::string& id);
   void remove_image(const std::string& name);
+  void save_texture(const std::string& hash, std::string_view bytes);
+  std::optional<std::string> load_texture(const std::string& hash) const;
+  void remove_texture(const std::string& hash);
+  std::vector<std::string> texture_names() const;
 
   struct Stored {
     nlohmann::json record;

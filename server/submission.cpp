@@ -23,41 +23,15 @@ std::string random_id() {
 
 namespace {
 
-ApiError limit_error(const std::string& limit, const std::string& message) {
-  ApiError e = api_error(422, "limit_exceeded", message);
-  e.limit = limit;
-  return e;
-}
-
-ApiError scene_error(const Diagnostics& diags) {
-  const Diagnostic* first = diags.first_error();
-  ApiError e = api_error(400, "invalid_scene", first ? first->message : "invalid scene");
-  if (first) {
-    e.line = first->where.line;
-    e.column = first->where.column;
-    e.path = first->where.path;
-  }
-  e.details = nlohmann::json::array();
-  for (const Diagnostic& d : diags.items()) {
-    if (d.severity != Severity::error) continue;
-    nlohmann::json item = {{"code", d.code}, {"message", d.message}};
-    if (d.where.line > 0) {
-      item["line"] = d.where.line;
-      item["column"] = d.where.column;
-    }
-    if (!d.where.path.empty()) item["path"] = d.where.path;
-    e.details.push_back(item);
-  }
-  return e;
-}
-
 // The cache key: the scene as parsed (so layout and comments do not matter, and a model file
-// and its JSON twin share results) and every option that changes pixels (not the format: the
-// cache holds PNGs and converts).
-std::string content_key(const SceneDesc& desc, const RenderOptions& options) {
-  return sha256_hex("render-version " + std::to_string(kRenderVersion) + "\n" + write_json(desc) +
-                    "\n" + canonical_string(options))
-      .substr(0, 40);
+// and its JSON twin share results), the hash of each texture file it names, and every option
+// that changes pixels (not the format: the cache holds PNGs and converts).
+std::string content_key(const SceneDesc& desc, const RenderOptions& options,
+                        const std::vector<std::string>& textures) {
+  std::string text = "render-version " + std::to_string(kRenderVersion) + "\n" + write_json(desc) +
+                     "\n" + canonical_string(options);
+  for (const std::string& t : textures) text += "\ntexture " + t;
+  return sha256_hex(text).substr(0, 40);
 }
 
 }  // namespace
@@ -73,7 +47,7 @@ std::shared_ptr<Job> Service::new_job(const std::string& client) {
 }
 
 Submitted Service::submit(const std::string& scene_text, const Params& params,
-                          const std::string& client) {
+                          const std::string& client, const TextureFiles& textures) {
   if (shutting_down_) {
     ApiError e = api_error(503, "shutting_down", "the server is shutting down; try again shortly");
     e.retry_after = 5;
@@ -102,8 +76,16 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     }
   }
 
+  if (ApiError e = check_uploads(textures)) {
+    metrics_.rejected(e.limit);
+    return {nullptr, e};
+  }
   LoadedScene loaded = load_scene(scene_text);
   if (!loaded.scene) return {nullptr, scene_error(loaded.diags)};
+  if (ApiError e = resolve_uploads(*loaded.scene, textures)) {
+    if (!e.limit.empty()) metrics_.rejected(e.limit);
+    return {nullptr, e};
+  }
   auto scene = std::make_shared<const Scene>(std::move(*loaded.scene));
 
   // Precedence: the query, the scene's render block, the server's default profile.
@@ -139,7 +121,8 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   job->width = width;
   job->height = height;
   // A time limit makes the result depend on the machine's speed: never shared.
-  if (options.time_limit == 0) job->cache_key = content_key(loaded.desc, options);
+  const std::vector<std::string> hashes = texture_hashes(*scene, textures);
+  if (options.time_limit == 0) job->cache_key = content_key(loaded.desc, options, hashes);
   job->image_name = job->cache_key.empty() ? job->id : job->cache_key;
 
   bool hit;
@@ -151,7 +134,10 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
           (cache_.get(job->cache_key) || store_.has_image(job->cache_key));
     ++image_refs_[job->image_name];
   }
-  if (!hit) job->scene = scene;  // what the render reads; the text is on disk for re-runs
+  if (!hit) {  // what the render reads; the text and textures are on disk for re-runs
+    job->scene = scene;
+    job->textures = hashes;
+  }
   if (hit) {
     std::lock_guard jl(job->mu);
     job->state = JobState::done;
@@ -162,9 +148,13 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   }
   if (!job->cache_key.empty()) metrics_.cache(hit);
   try {
-    if (!hit) store_.save_scene(job->id, scene_text);
+    if (!hit) {
+      keep_textures(*job, *scene, textures);
+      store_.save_scene(job->id, scene_text);
+    }
     store_.save_record(*job);
   } catch (const std::exception& ex) {
+    release_textures(*job);
     {
       std::lock_guard lock(mu_);
       if (--image_refs_[job->image_name] == 0) image_refs_.erase(job->image_name);

@@ -10,16 +10,19 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -31,6 +34,7 @@
 #include "rayfarm/image_io.h"
 #include "rayfarm/load.h"
 #include "rayfarm/render.h"
+#include "rayfarm/sha256.h"
 #include "service.h"
 
 namespace rayfarm::server {
@@ -204,16 +208,17 @@ Json wait_running(httplib::Client& c, const std::string& id) {
   return wait_for(c, id, [](const Json& st) { return st.value("state", "") != "queued"; }, 30s);
 }
 
-Scene load_or_fail(const std::string& text) {
-  LoadedScene loaded = load_scene(text);
+Scene load_or_fail(const std::string& text, const ResourceResolver* textures = nullptr) {
+  LoadedScene loaded = load_scene(text, LoadDetail::full, textures);
   EXPECT_TRUE(loaded.scene.has_value());
   return loaded.scene ? *loaded.scene : Scene{};
 }
 
 // What `rayfarm render` writes for this scene and these options: the reference bytes.
 std::string local_render(const std::string& text, const std::vector<std::pair<std::string, std::string>>& opts,
-                         ImageFormat format = ImageFormat::png) {
-  Scene scene = load_or_fail(text);
+                         ImageFormat format = ImageFormat::png,
+                         const ResourceResolver* textures = nullptr) {
+  Scene scene = load_or_fail(text, textures);
   RenderOptions options;
   for (auto& [k, v] : opts) EXPECT_EQ(apply_option(options, k, v), std::nullopt) << k;
   std::string error;
@@ -1257,6 +1262,397 @@ TEST(ServerCompare, DiffAnswersAPng) {
   ASSERT_EQ(r->status, 200);
   EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
   EXPECT_EQ(decode_or_fail(r->body), diff_image(a, b, {}));
+}
+
+// ---- Textures uploaded with the scene ----------------------------------------------------
+
+// A texplane whose texture entity names a path up a directory, and a projector that names an
+// absolute path directly: both are only keys of the upload.
+constexpr const char* kTexScene = R"(camera cam
+{ pixeldim 40 30
+  worlddim 8 6
+  viewpoint 4 3 5 }
+material wall
+{ ambient 1 1 1
+  diffuse 3 3 3 }
+light lamp
+{ location 4 3 2
+  emissivity 4 4 4 }
+plane floor
+{ material wall
+  normal 0 1 0
+  point 0 -1 0 }
+texture brick
+{ filename ../images/brick.ppm }
+texplane back
+{ material wall
+  normal 0 0 1
+  point 0 0 -4
+  xdir 1 0 0
+  dimensions 8 6
+  texname brick
+  mode 0 }
+projector slide
+{ emissivity 5 5 5
+  location 4 3 2
+  point 2 1.5 0
+  normal 0 0 1
+  xdir 1 0 0
+  dimensions 4 3
+  texname /slides/mike.ppm
+  mode 0 }
+)";
+
+// One texplane naming `path` directly.
+std::string one_texture_scene(const std::string& path) {
+  const std::string text = kTexScene;
+  std::string scene = text.substr(0, text.find("texture brick")) +
+                      "texplane back\n{ material wall\n  normal 0 0 1\n  point 0 0 -4\n"
+                      "  xdir 1 0 0\n  dimensions 8 6\n  texname PATH\n  mode 0 }\n";
+  return scene.replace(scene.find("PATH"), 4, path);
+}
+
+// A 4x4 P3 texture as the course writes them (a comment in the header); `seed` picks texels.
+std::string texture_ppm(int seed) {
+  std::string s = "P3\n# a test texture\n4 4\n255\n";
+  for (int i = 0; i < 16; ++i)
+    for (int c = 0; c < 3; ++c)
+      s += std::to_string((seed * 53 + i * 29 + c * 71) % 256) + (c == 2 ? "\n" : " ");
+  return s;
+}
+
+using Files = std::map<std::string, std::string>;
+
+Files tex_files(int brick, int slide) {
+  return {{"../images/brick.ppm", texture_ppm(brick)}, {"/slides/mike.ppm", texture_ppm(slide)}};
+}
+
+// The local render's side: texture files from a map, as FileResolver reads them from disk.
+class MapResolver final : public ResourceResolver {
+ public:
+  explicit MapResolver(Files files) : files_(std::move(files)) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override {
+    auto it = files_.find(path);
+    if (it != files_.end()) return it->second;
+    error = "no such file";
+    return std::nullopt;
+  }
+
+ private:
+  Files files_;
+};
+
+std::string local_textured(const std::string& text, const Files& files,
+                           const std::vector<std::pair<std::string, std::string>>& opts) {
+  MapResolver resolver(files);
+  return local_render(text, opts, ImageFormat::png, &resolver);
+}
+
+httplib::MultipartFormDataItems upload(const std::string& scene, const Files& textures) {
+  httplib::MultipartFormDataItems items = {{"scene", scene, "scene.txt", "text/plain"}};
+  for (const auto& [path, bytes] : textures)
+    items.push_back({path, bytes, "texture.ppm", "image/x-portable-pixmap"});
+  return items;
+}
+
+Rendered render_upload(httplib::Client& c, const std::string& q, const std::string& scene,
+                       const Files& textures) {
+  auto r = c.Post(query("/render", "wait=1" + (q.empty() ? "" : "&" + q)), upload(scene, textures));
+  EXPECT_TRUE(r);
+  if (!r) return {};
+  EXPECT_EQ(r->status, 200) << r->body;
+  return {r->get_header_value("X-Cache"), r->get_header_value("ETag"),
+          r->get_header_value("X-Job-Id"), r->body};
+}
+
+// 1-based line and column of the first `needle` in `text`.
+std::pair<int, int> place_of(const std::string& text, const std::string& needle) {
+  const size_t at = text.find(needle);
+  const size_t line_start = text.rfind('\n', at);
+  const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + at, '\n'));
+  return {line, static_cast<int>(at - (line_start == std::string::npos ? 0 : line_start + 1)) + 1};
+}
+
+bool contains(const Json& s, const std::string& part) {
+  return s.is_string() && s.get<std::string>().find(part) != std::string::npos;
+}
+
+TEST(ServerTextures, UploadedTexturesRenderLikeTheLocalRender) {
+  TestServer server;
+  auto c = server.client();
+  const Files files = tex_files(1, 2);
+  const std::string expected = local_textured(kTexScene, files, {{"spp", "2"}});
+  EXPECT_EQ(render_upload(*c, "spp=2", kTexScene, files).png, expected);
+  // The textures show in the image: other texels, other pixels.
+  EXPECT_NE(local_textured(kTexScene, tex_files(3, 2), {{"spp", "2"}}), expected);
+  EXPECT_NE(local_textured(kTexScene, tex_files(1, 3), {{"spp", "2"}}), expected);
+
+  // POST /compare renders its reference from the same parts.
+  auto items = upload(kTexScene, files);
+  items.push_back({"image", expected, "mine.png", "image/png"});
+  auto r = c->Post("/compare?spp=2", items);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(json_of(r)["identical"], true);
+}
+
+TEST(ServerTextures, MissingTextureIs400WithItsPathAndPlace) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Post("/render", upload(kTexScene, {{"../images/brick.ppm", texture_ppm(1)}}));
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  Json e = error_of(r);
+  EXPECT_EQ(e["code"], "invalid_scene");
+  EXPECT_TRUE(contains(e["message"], "'/slides/mike.ppm'")) << e.dump();
+  auto [line, column] = place_of(kTexScene, "/slides/mike.ppm");
+  EXPECT_EQ(e["line"], line);
+  EXPECT_EQ(e["column"], column);
+  ASSERT_EQ(e["errors"].size(), 1u);
+  EXPECT_EQ(e["errors"][0]["code"], "texture-missing");
+
+  // A plain body carries no textures: each is missing, at its own place.
+  auto plain = c->Post("/render", kTexScene, "text/plain");
+  ASSERT_TRUE(plain);
+  EXPECT_EQ(plain->status, 400);
+  e = error_of(plain);
+  ASSERT_EQ(e["errors"].size(), 2u) << e.dump();
+  EXPECT_TRUE(contains(e["errors"][0]["message"], "'../images/brick.ppm'"));
+  EXPECT_EQ(e["errors"][0]["line"], place_of(kTexScene, "../images/brick.ppm").first);
+  EXPECT_EQ(e["errors"][0]["column"], place_of(kTexScene, "../images/brick.ppm").second);
+  EXPECT_TRUE(contains(e["errors"][1]["message"], "'/slides/mike.ppm'"));
+
+  // Bytes that are no image: a scene error at the same place.
+  auto junk = c->Post("/render", upload(kTexScene, {{"../images/brick.ppm", "P3\n4 4\n"},
+                                                    {"/slides/mike.ppm", texture_ppm(2)}}));
+  ASSERT_TRUE(junk);
+  EXPECT_EQ(junk->status, 400);
+  EXPECT_EQ(error_of(junk)["errors"][0]["code"], "texture-invalid");
+  EXPECT_EQ(error_of(junk)["line"], place_of(kTexScene, "../images/brick.ppm").first);
+}
+
+TEST(ServerTextures, PartTheSceneDoesNotNameIs400) {
+  TestServer server;
+  auto c = server.client();
+  Files typo = tex_files(1, 2);
+  typo["images/brick.ppm"] = texture_ppm(1);
+  auto r = c->Post("/render", upload(kTexScene, typo));
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  Json e = error_of(r);
+  EXPECT_EQ(e["code"], "unknown_part");
+  EXPECT_TRUE(contains(e["message"], "'images/brick.ppm'")) << e.dump();
+  EXPECT_TRUE(contains(e["message"], "did you mean '../images/brick.ppm'")) << e.dump();
+
+  auto none = c->Post("/render", upload(kScene, {{"brick.ppm", texture_ppm(1)}}));
+  ASSERT_TRUE(none);
+  EXPECT_EQ(none->status, 400);
+  EXPECT_EQ(error_of(none)["code"], "unknown_part");
+
+  // Sent twice: which one was meant?
+  auto items = upload(kTexScene, tex_files(1, 2));
+  items.push_back({"/slides/mike.ppm", texture_ppm(3), "again.ppm", "image/x-portable-pixmap"});
+  auto twice = c->Post("/render", items);
+  ASSERT_TRUE(twice);
+  EXPECT_EQ(twice->status, 400);
+  EXPECT_EQ(error_of(twice)["code"], "duplicate_part");
+
+  // /compare's own parts are 'scene' and 'image'; anything else must be a texture.
+  items = upload(kTexScene, typo);
+  items.push_back({"image", png_bytes(gradient(40, 30)), "mine.png", "image/png"});
+  auto compare = c->Post("/compare", items);
+  ASSERT_TRUE(compare);
+  EXPECT_EQ(compare->status, 400);
+  EXPECT_EQ(error_of(compare)["code"], "unknown_part");
+}
+
+TEST(ServerTextures, TooManyOrTooLargeTexturesAre422) {
+  Settings s = test_settings();
+  s.max_textures = 1;
+  s.max_texture_bytes = 300;
+  TestServer server(s);
+  auto c = server.client();
+  auto uploads = c->Post("/render", upload(kTexScene, tex_files(1, 2)));
+  auto named = c->Post("/render", upload(kTexScene, {{"../images/brick.ppm", texture_ppm(1)}}));
+  for (auto* r : {&uploads, &named}) {
+    ASSERT_TRUE(*r);
+    EXPECT_EQ((*r)->status, 422) << (*r)->body;
+    EXPECT_EQ(error_of(*r)["code"], "limit_exceeded");
+    EXPECT_EQ(error_of(*r)["limit"], "max_textures");
+  }
+  const std::string scene = one_texture_scene("big.ppm");
+  const std::string big = texture_ppm(1) + std::string(300, ' ');
+  auto large = c->Post("/render", upload(scene, {{"big.ppm", big}}));
+  ASSERT_TRUE(large);
+  EXPECT_EQ(large->status, 422);
+  EXPECT_EQ(error_of(large)["limit"], "max_texture_bytes");
+  EXPECT_TRUE(contains(error_of(large)["message"], "'big.ppm'"));
+  auto ok = c->Post("/render", upload(scene, {{"big.ppm", texture_ppm(1)}}));
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 202) << ok->body;
+
+  // The body limit still holds for the request as a whole.
+  Settings small = test_settings();
+  small.max_body_bytes = 4096;
+  TestServer tight(small);
+  auto over = tight.client()->Post("/render", upload(scene, {{"big.ppm", std::string(5000, ' ')}}));
+  ASSERT_TRUE(over);
+  EXPECT_EQ(over->status, 413);
+}
+
+TEST(ServerTextures, LimitsAreFlagsAndEnvironmentVariables) {
+  auto parse = [](std::vector<std::string> args) {
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    int code = 0;
+    return parse_settings(static_cast<int>(argv.size()), argv.data(), code);
+  };
+  auto s = parse({"rayfarmd"});
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->max_textures, 16);
+  EXPECT_EQ(s->max_texture_bytes, 8u << 20);
+  s = parse({"rayfarmd", "--max-textures", "3", "--max-texture-bytes", "1000"});
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->max_textures, 3);
+  EXPECT_EQ(s->max_texture_bytes, 1000u);
+  ::setenv("RAYFARM_MAX_TEXTURES", "5", 1);
+  ::setenv("RAYFARM_MAX_TEXTURE_BYTES", "2048", 1);
+  s = parse({"rayfarmd"});
+  ::unsetenv("RAYFARM_MAX_TEXTURES");
+  ::unsetenv("RAYFARM_MAX_TEXTURE_BYTES");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->max_textures, 5);
+  EXPECT_EQ(s->max_texture_bytes, 2048u);
+}
+
+TEST(ServerTextures, TextureBytesArePartOfTheCacheKey) {
+  TestServer server;
+  auto c = server.client();
+  Rendered first = render_upload(*c, "", kTexScene, tex_files(1, 2));
+  EXPECT_EQ(first.cache, "miss");
+  Rendered same = render_upload(*c, "", kTexScene, tex_files(1, 2));
+  EXPECT_EQ(same.cache, "hit");
+  EXPECT_EQ(same.key, first.key);
+  EXPECT_EQ(same.png, first.png);
+  // Same scene, same paths, another brick: another result.
+  Rendered other = render_upload(*c, "", kTexScene, tex_files(3, 2));
+  EXPECT_EQ(other.cache, "miss");
+  EXPECT_NE(other.key, first.key);
+  EXPECT_NE(other.png, first.png);
+  EXPECT_EQ(other.png, local_textured(kTexScene, tex_files(3, 2), {}));
+  EXPECT_EQ(render_upload(*c, "", kTexScene, tex_files(3, 2)).cache, "hit");
+  // The two files swapped between the paths: not the same request either.
+  EXPECT_EQ(render_upload(*c, "", kTexScene, tex_files(2, 1)).cache, "miss");
+}
+
+// Every file name under `dir`, recursively.
+std::set<std::string> file_names(const std::filesystem::path& dir) {
+  std::set<std::string> names;
+  for (auto& e : std::filesystem::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) names.insert(e.path().filename().string());
+  return names;
+}
+
+TEST(ServerTextures, QueuedTextureJobRendersWithItsTexturesAfterARestart) {
+  TempDir dir;
+  Settings s = test_settings();
+  s.results_dir = dir.path.string();
+  s.shutdown_grace = 0;
+  const Files files = tex_files(1, 2);
+  const std::filesystem::path textures = dir.path / "textures";
+  std::vector<std::string> fillers;
+  std::string id;
+  {
+    TestServer server(s);
+    auto c = server.client("alice");
+    // Four long jobs take all of alice's running slots: her fifth stays queued.
+    for (int i = 0; i < 4; ++i) {
+      fillers.push_back(submit(*c, kLong));
+      ASSERT_EQ(wait_running(*c, fillers.back())["state"], "running");
+    }
+    auto r = c->Post("/render?spp=2", upload(kTexScene, files));
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 202) << r->body;
+    id = json_of(r)["id"];
+    EXPECT_EQ(status_of(*c, id)["state"], "queued");
+    // On disk under the hashes of their bytes, never under the names the scene gives them.
+    std::set<std::string> expected = {sha256_hex(files.at("../images/brick.ppm")),
+                                      sha256_hex(files.at("/slides/mike.ppm"))};
+    EXPECT_EQ(file_names(textures), expected);
+    for (const std::string& name : file_names(dir.path))
+      EXPECT_EQ(name.find("ppm"), std::string::npos) << name;
+    server.stop();  // as if killed: the job never started
+  }
+  TestServer server(s);
+  auto c = server.client("alice");
+  for (const std::string& f : fillers) EXPECT_EQ(code_of(c->Delete("/jobs/" + f)), 200);
+  Json st = wait_final(*c, id);
+  EXPECT_EQ(st["state"], "done") << st.dump();
+  auto r = c->Get("/jobs/" + id + "/image");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  EXPECT_EQ(r->body, local_textured(kTexScene, files, {{"spp", "2"}}));
+  // A job that has ended needs its textures no more.
+  auto deadline = Clock::now() + 5s;
+  while (!file_names(textures).empty() && Clock::now() < deadline) std::this_thread::sleep_for(5ms);
+  EXPECT_TRUE(file_names(textures).empty());
+}
+
+TEST(ServerTextures, PathsAreKeysNeverTheServersFiles) {
+  TempDir dir;
+  // A valid image on the server's disk, named absolutely and by climbing to it from here.
+  const std::string ppm = texture_ppm(4);
+  {
+    std::ofstream out(dir.path / "real.ppm", std::ios::binary);
+    out << ppm;
+  }
+  const std::string absolute = (dir.path / "real.ppm").string();
+  std::string climbing;
+  for (int i = 0; i < 24; ++i) climbing += "../";
+  climbing += absolute.substr(1);
+  TestServer server;
+  auto c = server.client();
+  for (const std::string& path : {absolute, climbing, std::string("/etc/passwd")}) {
+    const std::string scene = one_texture_scene(path);
+    auto r = c->Post("/render", upload(scene, {}));
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << path;
+    Json e = error_of(r);
+    EXPECT_EQ(e["errors"][0]["code"], "texture-missing") << path << ": " << e.dump();
+    EXPECT_TRUE(contains(e["message"], "'" + path + "'")) << e.dump();
+    EXPECT_EQ(e["line"], place_of(scene, path).first);
+    EXPECT_EQ(e["column"], place_of(scene, path).second);
+  }
+  // Uploaded under such a name, the part is that texture.
+  const std::string scene = one_texture_scene("/etc/passwd");
+  Rendered r = render_upload(*c, "", scene, {{"/etc/passwd", ppm}});
+  EXPECT_EQ(r.png, local_textured(scene, {{"/etc/passwd", ppm}}, {}));
+}
+
+// A bundled sample's textures are files of the samples directory, read at start: a request
+// for it names none, and a sample whose texture lies outside the directory is not offered.
+TEST(ServerTextures, BundledSampleRendersWithTheTexturesBesideIt) {
+  TempDir dir;
+  auto write = [](const std::filesystem::path& p, const std::string& bytes) {
+    std::filesystem::create_directories(p.parent_path());
+    std::ofstream(p, std::ios::binary) << bytes;
+  };
+  const std::string inside = "# a texture beside it\n" + one_texture_scene("maps/brick.ppm");
+  write(dir.path / "samples" / "inside.txt", inside);
+  write(dir.path / "samples" / "maps" / "brick.ppm", texture_ppm(6));
+  write(dir.path / "samples" / "outside.txt", one_texture_scene("../brick.ppm"));
+  write(dir.path / "brick.ppm", texture_ppm(6));
+  Settings s = test_settings();
+  s.samples_dir = (dir.path / "samples").string();
+  TestServer server(s);
+  auto c = server.client();
+  Json list = json_of(c->Get("/samples"));
+  ASSERT_EQ(list["samples"].size(), 1u) << list.dump();
+  EXPECT_EQ(list["samples"][0]["name"], "inside");
+  auto r = c->Post("/render?sample=inside&wait=1");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(r->body, local_textured(inside, {{"maps/brick.ppm", texture_ppm(6)}}, {}));
 }
 
 // ---- Samples, health, metrics, authentication --------------------------------------------

@@ -2,6 +2,8 @@
 // pipeline parts the render needs.
 #include "render/prepared_scene.h"
 
+#include "geometry/frame.h"
+
 #include <algorithm>
 #include <exception>
 #include <limits>
@@ -28,14 +30,9 @@ bool nonzero(const glm::dvec3& c) { return c.x > 0 || c.y > 0 || c.z > 0; }
 // The lecture's shininess when a material gives none (SPEC §1).
 constexpr double kLectureShininess = 32;
 
-// A plane's frame: u is xdir's part in the plane, v = n × u.
-struct Frame {
-  glm::dvec3 n, u, v;
-};
-Frame frame_of(const glm::dvec3& normal, const glm::dvec3& xdir) {
-  const glm::dvec3 n = glm::normalize(normal);
-  const glm::dvec3 u = glm::normalize(xdir - glm::dot(xdir, n) * n);
-  return {n, u, glm::cross(n, u)};
+// A frame the builder checked exists (geometry/frame.h).
+PlaneFrame frame_of(const glm::dvec3& normal, const glm::dvec3& xdir) {
+  return *plane_frame(normal, xdir);
 }
 
 // The bounded shapes other than spheres, from the scene's objects.
@@ -46,7 +43,7 @@ struct ShapeMaker {
 
   PreparedShape<T> window(typename PreparedShape<T>::Kind kind, const Plane& plane,
                           const Window& w) const {
-    const Frame f = frame_of(plane.normal, w.xdir);
+    const PlaneFrame f = frame_of(plane.normal, w.xdir);
     PreparedShape<T> s;
     s.kind = kind;
     s.normal = narrow<T>(f.n);
@@ -75,12 +72,13 @@ struct ShapeMaker {
                                 : Plane{glm::cross(t.vertex[1] - t.vertex[0],
                                                    t.vertex[2] - t.vertex[1]),
                                         t.vertex[0]};
-    const glm::dvec3 n = glm::normalize(plane.normal);
-    // The frame's x axis along the first edge as seen in the plane.
-    const glm::dvec3 edge = t.vertex[1] - t.vertex[0];
-    const glm::dvec3 xdir = glm::length(edge - glm::dot(edge, n) * n) > 0 ? edge : t.vertex[2] - t.vertex[0];
+    // The frame's x axis along an edge that has a part in the plane (one has: the builder
+    // refuses triangles without area).
+    glm::dvec3 xdir = t.vertex[1] - t.vertex[0];
+    for (const glm::dvec3& edge : {t.vertex[2] - t.vertex[0], t.vertex[2] - t.vertex[1]})
+      if (!plane_frame(plane.normal, xdir)) xdir = edge;
     PreparedShape<T> s = window(PreparedShape<T>::triangle, plane, {xdir, 0, 0});
-    const Frame f = frame_of(plane.normal, xdir);
+    const PlaneFrame f = frame_of(plane.normal, xdir);
     for (int i = 0; i < 3; ++i) {
       const glm::dvec3 q = t.vertex[i] - plane.point;
       s.tx[i] = narrow<T>(glm::dot(f.u, q));
@@ -287,7 +285,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
       pp.alt_material = t->alt_material;
       pp.world_xz = t->world_xz;
       if (!t->world_xz) {
-        const Frame f = frame_of(t->plane.normal, t->tile.xdir);
+        const PlaneFrame f = frame_of(t->plane.normal, t->tile.xdir);
         pp.u = narrow<T>(f.u);
         pp.v = narrow<T>(f.v);
       }

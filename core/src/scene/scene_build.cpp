@@ -74,12 +74,11 @@ class SceneBuilder {
     return scene;
   }
 
-  std::optional<int> material(const EntityDesc& e, const AttrDesc& a, const std::string& in) {
+  std::optional<int> material(const AttrDesc& a, const std::string& in) {
     auto it = material_index_.find(a.word);
     if (it != material_index_.end()) return it->second;
     if (names_[static_cast<int>(EntityKind::material)].count(a.word))
       return std::nullopt;  // defined but broken: reported
-    (void)e;
     diags_.error("undefined-material",
                  undefined_message("material", a.word, in,
                                    names_[static_cast<int>(EntityKind::material)]),
@@ -269,7 +268,7 @@ std::optional<std::string> EntityReader::word(std::string_view key) {
 std::optional<int> EntityReader::material(std::string_view key) {
   const AttrDesc* a = find(key);
   if (!a) return std::nullopt;
-  return builder_.material(e_, *a, describe());
+  return builder_.material(*a, describe());
 }
 
 std::optional<int> EntityReader::texture(std::string_view key) {

@@ -154,7 +154,7 @@ void ReferenceTracer::surface(int k, const V3& p, V3& ambient, V3& diffuse) cons
 }
 
 V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_owner,
-                               const V3& eye, const V3& diffuse) {
+                               const V3& origin, const V3& diffuse) {
   const RefLight& light = s_.lights[j];
   const V3 lv = sub(light.location, p);
   const double d = length(lv);
@@ -210,7 +210,7 @@ V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_
   if (mat.shininess != 0) {
     // The glint looks from the ray's origin, which for a secondary ray is the point its
     // object's hit test last stored: the shadow searches above may have moved it.
-    const V3 base = base_owner < 0 ? eye : stored_[base_owner];
+    const V3 base = base_owner < 0 ? origin : stored_[base_owner];
     const V3 v = unit(sub(base, p));
     const V3 h = unit(add(v, l));
     const double glint = std::pow(dot(n, h), mat.shininess);

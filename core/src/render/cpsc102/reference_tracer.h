@@ -35,8 +35,10 @@ class ReferenceTracer {
   // The nearest object (file order breaks ties) with t > 0, skipping `skip` entirely.
   int closest(const V3& base, const V3& dir, int skip, double& t);
   V3 trace(const V3& base, int base_owner, const V3& dir, double total, int last, int depth);
+  // `origin` is the ray's origin: the eye for a primary ray; a secondary ray's glint looks
+  // from its `base_owner`'s stored point instead.
   V3 illuminate(int light, int object, const V3& p, const V3& n, int base_owner,
-                const V3& base, const V3& diffuse);
+                const V3& origin, const V3& diffuse);
   V3 normal_at(int k, const V3& p) const;
   // The material colours at p: tiles and textures change ambient and diffuse.
   void surface(int k, const V3& p, V3& ambient, V3& diffuse) const;

@@ -3,7 +3,7 @@
 
 #include <glm/geometric.hpp>
 
-#include "scene/registry.h"
+#include "scene/entities/plane_parts.h"
 
 namespace rayfarm::entities {
 namespace {
@@ -62,22 +62,18 @@ void build_spot(EntityReader& r, Scene& scene) {
   scene.lights.push_back(std::move(*l));
 }
 
+// The slide is a window of a plane, read as a finite plane's.
 void build_projector(EntityReader& r, Scene& scene) {
   auto l = base(r, LightKind::projector);
-  auto point = r.vec3("point"), normal = r.vec3("normal"), xdir = r.vec3("xdir");
-  auto dims = r.pair("dimensions");
+  auto plane = read_plane(r);
   auto texture = r.texture("texname");
   auto mode = r.integer("mode");
-  if (!l || !point || !normal || !xdir || !dims || !texture || !mode) return;
-  const glm::dvec3 n = glm::normalize(*normal);
-  if (glm::length(*xdir - glm::dot(*xdir, n) * n) <= 1e-12 * glm::length(*xdir)) {
-    r.error("out-of-range", "'xdir' must not be parallel to 'normal': it sets the slide's x axis",
-            r.find("xdir")->where);
-    return;
-  }
-  l->point = *point;
-  l->normal = *normal;
-  l->window = {*xdir, (*dims)[0], (*dims)[1]};
+  if (!l || !plane || !texture || !mode) return;
+  auto window = read_window(r, *plane);
+  if (!window) return;
+  l->point = plane->point;
+  l->normal = plane->normal;
+  l->window = *window;
   l->texture = *texture;
   l->mode = *mode;
   scene.lights.push_back(std::move(*l));
@@ -105,9 +101,8 @@ void pov_spot(PovWriter& w, int index) {
 // through a rectangle.
 void pov_projector(PovWriter& w, int index) {
   const Light& l = w.scene.lights[index];
-  const glm::dvec3 n = glm::normalize(l.normal);
-  const glm::dvec3 u = glm::normalize(l.window.xdir - glm::dot(l.window.xdir, n) * n);
-  const glm::dvec3 v = glm::cross(n, u), p = l.point;
+  const PlaneFrame f = *plane_frame(l.normal, l.window.xdir);  // checked when built
+  const glm::dvec3 u = f.u, v = f.v, p = l.point;
   const glm::dvec3 c[4] = {p, p + l.window.width * u, p + l.window.width * u + l.window.height * v,
                            p + l.window.height * v};
   pov_light_source(w, l);

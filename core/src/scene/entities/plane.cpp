@@ -108,9 +108,8 @@ void build_texplane(EntityReader& r, Scene& scene) {
 
 // The window's corners, counter-clockwise from `point`.
 std::array<glm::dvec3, 4> corners(const Plane& plane, const Window& w) {
-  const glm::dvec3 n = glm::normalize(plane.normal);
-  const glm::dvec3 u = glm::normalize(w.xdir - glm::dot(w.xdir, n) * n), v = glm::cross(n, u);
-  const glm::dvec3 p = plane.point;
+  const PlaneFrame f = *plane_frame(plane.normal, w.xdir);  // checked when built
+  const glm::dvec3 u = f.u, v = f.v, p = plane.point;
   return {p, p + w.width * u, p + w.width * u + w.height * v, p + w.height * v};
 }
 
@@ -145,9 +144,10 @@ void pov_tiled(PovWriter& w, int index) {
   pov_plane_part(w, t.plane);
   glm::dvec3 u{1, 0, 0}, v{0, 0, 1}, n{0, 1, 0};
   if (!t.world_xz) {
-    n = glm::normalize(t.plane.normal);
-    u = glm::normalize(t.tile.xdir - glm::dot(t.tile.xdir, n) * n);
-    v = glm::cross(n, u);
+    const PlaneFrame f = *plane_frame(t.plane.normal, t.tile.xdir);
+    n = f.n;
+    u = f.u;
+    v = f.v;
   }
   const glm::dvec3 a = PovWriter::flip(u) * t.tile.width, b = PovWriter::flip(v) * t.tile.height,
                    c = PovWriter::flip(n);

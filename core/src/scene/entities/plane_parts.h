@@ -6,6 +6,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "geometry/frame.h"
 #include "scene/registry.h"
 
 namespace rayfarm::entities {
@@ -22,8 +23,7 @@ inline std::optional<Window> read_window(EntityReader& r, const Plane& plane,
   auto xdir = r.vec3("xdir");
   auto dims = r.pair(size_key);
   if (!xdir || !dims) return std::nullopt;
-  const glm::dvec3 n = glm::normalize(plane.normal);
-  if (glm::length(*xdir - glm::dot(*xdir, n) * n) <= 1e-12 * glm::length(*xdir)) {
+  if (!plane_frame(plane.normal, *xdir)) {
     r.error("out-of-range",
             "'xdir' must not be parallel to 'normal': its part in the plane is the x axis of " +
                 r.describe(),
