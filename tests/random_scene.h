@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <glm/geometric.hpp>
 #include <random>
 #include <string>
 

@@ -6,11 +6,13 @@
 #include <array>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
 
+#include "rayfarm/image_io.h"
 #include "rayfarm/load.h"
 #include "rayfarm/render.h"
 
@@ -56,6 +58,35 @@ inline LoadedScene load_file(const std::string& path, std::string* text_out = nu
 
 inline Scene scene_from(const std::string& text) {
   LoadedScene loaded = load_scene(text);
+  std::string errors;
+  for (const Diagnostic& d : loaded.diags.items()) errors += format_diagnostic(d, "scene", text);
+  EXPECT_TRUE(loaded.scene.has_value()) << errors;
+  return loaded.scene ? *loaded.scene : Scene{};
+}
+
+// Texture files held in memory (path as the scene writes it -> image), served as PPM bytes
+// the way the CLI serves files beside the model file.
+class MemoryResolver final : public ResourceResolver {
+ public:
+  explicit MemoryResolver(std::map<std::string, Image> files) : files_(std::move(files)) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override {
+    auto it = files_.find(path);
+    if (it == files_.end()) {
+      error = "no such file";
+      return std::nullopt;
+    }
+    const std::vector<unsigned char> bytes = encode_ppm(it->second);
+    return std::string(bytes.begin(), bytes.end());
+  }
+
+ private:
+  std::map<std::string, Image> files_;
+};
+
+// A scene whose textures are the given in-memory images.
+inline Scene scene_from(const std::string& text, std::map<std::string, Image> files) {
+  const MemoryResolver resolver(std::move(files));
+  LoadedScene loaded = load_scene(text, LoadDetail::full, &resolver);
   std::string errors;
   for (const Diagnostic& d : loaded.diags.items()) errors += format_diagnostic(d, "scene", text);
   EXPECT_TRUE(loaded.scene.has_value()) << errors;

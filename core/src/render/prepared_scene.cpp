@@ -327,6 +327,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   }
 
   Features& f = p.features;
+  f.transparency = translucent;  // before build_ray_culling, which leaves the light buffers out
   if (options.specialize) {
     f.lights = any_light && objects;
     f.shadows = options.shadows && f.lights;
@@ -375,7 +376,6 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     f.reflection = true;
     for (auto& m : p.materials) m.reflects = m.highlights = true;
   }
-  f.transparency = translucent;
   f.supersampling = options.spp > 1;
   return p;
 }

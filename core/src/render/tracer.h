@@ -211,7 +211,7 @@ class Tracer {
   // and filtered once by each translucent object on the way.
   Vec3<T> transmittance(Vec3<T> o, const Vec3<T>& d, Origin from, T dist) const {
     Vec3<T> through(1);
-    int crossed[8];
+    int crossed[4 * kMaxCrossings];  // every object met: at most one per step
     int n_crossed = 0;
     for (int steps = 0; steps < 4 * kMaxCrossings; ++steps) {
       const Hit<T> hit = closest(o, d, from, dist);
@@ -223,7 +223,7 @@ class Tracer {
       for (int i = 0; i < n_crossed; ++i) seen = seen || crossed[i] == hit.object;
       if (!seen) {
         through *= m.filter;
-        if (n_crossed < 8) crossed[n_crossed++] = hit.object;
+        crossed[n_crossed++] = hit.object;
       }
       const Vec3<T> p = o + hit.t * d;
       from = {hit.object, glm::dot(outward_normal(hit.object, p), d) < 0};

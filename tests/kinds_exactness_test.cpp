@@ -1,0 +1,332 @@
+// Every kind of object and light against the plain loops: seeded random scenes with spheres,
+// planes, tiled planes (both forms), fplanes, texplanes, triangles, tris and revsurfs, lit by
+// point lights, spotlights and projectors, with reflective and translucent materials. With
+// the scene-specific pipeline (hierarchies, screen bins, light buffers) and without it (a
+// plain loop everywhere) a render gives the same bytes, and the tracer's closest, occluded and
+// transmittance give the same answers.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <memory>
+
+#include "random_scene.h"
+#include "rayfarm/render.h"
+#include "render/prepared_scene.h"
+#include "render/tracer.h"
+
+namespace rayfarm {
+namespace {
+
+using test::Rng;
+
+// The scene's objects lie in this box, in front of the screen z = 0 and behind it.
+const glm::dvec3 kLo{-1, -1, -11}, kHi{9, 7, 1};
+
+glm::dvec3 point_in_box(Rng& rng) {
+  return {rng.in(kLo.x, kHi.x), rng.in(kLo.y, kHi.y), rng.in(kLo.z, kHi.z)};
+}
+
+// Half the time along an axis: flat shapes parallel to the axes have flat boxes, where the
+// hierarchy's slab test is tightest.
+glm::dvec3 random_normal(Rng& rng) {
+  if (rng.chance(0.5)) {
+    glm::dvec3 n(0);
+    n[rng.below(3)] = rng.chance(0.5) ? 1 : -1;
+    return n;
+  }
+  return rng.direction();
+}
+
+// A direction not parallel to n (an xdir with a part in the plane).
+glm::dvec3 random_xdir(Rng& rng, const glm::dvec3& n) {
+  for (;;) {
+    const glm::dvec3 x = rng.chance(0.3) ? glm::dvec3(1, 0, 0) : rng.direction();
+    if (glm::length(x - glm::dot(x, n) * n) > 0.2) return x;
+  }
+}
+
+Material material(std::string name, glm::dvec3 ambient, glm::dvec3 diffuse, glm::dvec3 specular,
+                  std::optional<double> shininess = std::nullopt, double transparency = 0) {
+  Material m;
+  m.name = std::move(name);
+  m.ambient = ambient;
+  m.diffuse = diffuse;
+  m.specular = specular;
+  m.shininess = shininess;
+  m.transparency = transparency;
+  return m;
+}
+
+void add(Scene& s, EntityKind kind, int material, Shape shape) {
+  Object& o = s.objects.emplace_back();
+  o.name = "o" + std::to_string(s.objects.size());
+  o.kind = kind;
+  o.material = material;
+  o.shape = std::move(shape);
+}
+
+// A small image of random texels.
+std::shared_ptr<const Image> random_image(Rng& rng, int w, int h) {
+  Image img(w, h);
+  for (auto& b : img.rgb) b = static_cast<std::uint8_t>(rng.below(256));
+  return std::make_shared<const Image>(std::move(img));
+}
+
+// Objects of every kind, in file order mixed. `translucent` adds glass materials (which turn
+// the light buffers off: shadow rays must then find every object on their way).
+Scene kinds_scene(Rng& rng, bool translucent) {
+  Scene s;
+  Camera cam;
+  cam.name = "c";
+  cam.width = 36;
+  cam.height = 27;
+  cam.world_width = 8;
+  cam.world_height = 6;
+  cam.viewpoint = {4, 3, 5};
+  s.cameras.push_back(cam);
+
+  s.materials.push_back(material("matte", glm::dvec3(1.5), {0.7, 0.5, 0.3}, glm::dvec3(0)));
+  s.materials.push_back(material("mirror", glm::dvec3(0.8), glm::dvec3(0.3), glm::dvec3(0.5), 16));
+  s.materials.push_back(material("glow", glm::dvec3(3, 2, 1), glm::dvec3(0), glm::dvec3(0)));
+  s.materials.push_back(material("alt", {2, 0.4, 0.4}, {0.2, 0.7, 0.2}, glm::dvec3(0)));
+  s.materials.push_back(material("shiny", glm::dvec3(1), glm::dvec3(0.4), {0.2, 0.3, 0.4}));
+  if (translucent) {
+    s.materials.push_back(
+        material("glass", glm::dvec3(0.5), {0.9, 0.6, 0.3}, glm::dvec3(0), std::nullopt, 0.6));
+    s.materials.push_back(
+        material("glassy mirror", glm::dvec3(0.5), {0.3, 0.8, 0.8}, glm::dvec3(0.3), 8, 0.4));
+  }
+  const int n_materials = static_cast<int>(s.materials.size());
+  auto any_material = [&] { return rng.below(n_materials); };
+
+  Texture tex;
+  tex.name = "t";
+  tex.path = "t.ppm";
+  tex.image = random_image(rng, 5, 4);
+  s.textures.push_back(tex);
+
+  Light point;
+  point.name = "point";
+  point.location = {rng.in(0, 8), rng.in(4, 9), rng.in(-6, 3)};
+  point.emissivity = glm::dvec3(rng.in(2, 6));
+  s.lights.push_back(point);
+  Light spot;
+  spot.name = "spot";
+  spot.kind = LightKind::spot;
+  spot.location = {rng.in(-2, 10), rng.in(5, 9), rng.in(-4, 2)};
+  spot.emissivity = {5, 4, 3};
+  spot.aim = point_in_box(rng);
+  spot.theta = rng.in(15, 40);
+  s.lights.push_back(spot);
+  Light projector;
+  projector.name = "projector";
+  projector.kind = LightKind::projector;
+  projector.location = {rng.in(2, 6), rng.in(3, 6), rng.in(1, 4)};
+  projector.emissivity = glm::dvec3(6);
+  projector.normal = {0, 0, 1};
+  projector.point = projector.location + glm::dvec3(-1.5, -1.5, -1);
+  projector.window = {{1, 0, 0}, 3, 3};
+  projector.texture = 0;
+  s.lights.push_back(projector);
+
+  // Spheres first and a wall on the left, then the other kinds shuffled.
+  for (int i = 0; i < 10; ++i)
+    add(s, EntityKind::sphere, any_material(), Sphere{point_in_box(rng), rng.in(0.2, 1)});
+  add(s, EntityKind::plane, 0, Plane{{1, 0, 0}, {-2, 0, 0}});
+  std::vector<int> kinds;
+  for (int i = 0; i < 3; ++i) kinds.push_back(0);  // fplane
+  for (int i = 0; i < 2; ++i) kinds.push_back(1);  // texplane
+  for (int i = 0; i < 2; ++i) kinds.push_back(2);  // triangle
+  for (int i = 0; i < 2; ++i) kinds.push_back(3);  // tri
+  kinds.push_back(4);                              // revsurf, a cone
+  kinds.push_back(7);                              // revsurf, a wave
+  kinds.push_back(5);                              // tiled_plane: the back wall
+  kinds.push_back(6);                              // tiled_plane, 2009 form: the floor
+  std::shuffle(kinds.begin(), kinds.end(), rng.engine);
+  for (int kind : kinds) {
+    const glm::dvec3 n = random_normal(rng), p = point_in_box(rng);
+    switch (kind) {
+      case 0:
+        add(s, EntityKind::fplane, any_material(),
+            FinitePlane{{n, p}, {random_xdir(rng, n), rng.in(0.5, 3), rng.in(0.5, 3)}});
+        break;
+      case 1:
+        add(s, EntityKind::texplane, any_material(),
+            TexPlane{{n, p}, {random_xdir(rng, n), rng.in(1, 4), rng.in(1, 4)}, 0, rng.below(2)});
+        break;
+      case 2: {
+        // Vertices off the plane, as the course's triangles may have them.
+        Triangle t;
+        for (glm::dvec3& v : t.vertex) v = p + rng.point(2);
+        t.plane = Plane{n, p};
+        add(s, EntityKind::triangle, any_material(), t);
+        break;
+      }
+      case 3: {
+        Triangle t;
+        for (glm::dvec3& v : t.vertex) v = p + rng.point(2);
+        add(s, EntityKind::tri, any_material(), t);
+        break;
+      }
+      case 4:
+      case 7:
+        // Short: every ray through a surface's cylinder costs a root search in the loop.
+        add(s, EntityKind::revsurf, any_material(),
+            Revsurf{kind == 4 ? 1 : 2 + rng.below(2), p, rng.direction(), rng.in(0.5, 2)});
+        break;
+      case 5:
+        add(s, EntityKind::tiled_plane, any_material(),
+            TiledPlane{{{0, 0, 1}, {0, 0, -12}},
+                       {random_xdir(rng, {0, 0, 1}), rng.in(0.5, 2), rng.in(0.5, 2)},
+                       false,
+                       3});
+        break;
+      default:
+        add(s, EntityKind::tiled_plane, any_material(),
+            TiledPlane{
+                {{0, 1, 0}, {0, -1.5, 0}}, {{1, 0, 0}, rng.in(0.5, 2), rng.in(0.5, 2)}, true, 3});
+        break;
+    }
+  }
+  // Exact copies of the first fplane and triangle in another material: at equal t the lower
+  // object number wins, in the loops and in the hierarchy alike.
+  for (EntityKind kind : {EntityKind::fplane, EntityKind::triangle}) {
+    const auto original = std::find_if(s.objects.begin(), s.objects.end(),
+                                       [&](const Object& o) { return o.kind == kind; });
+    add(s, kind, (original->material + 1) % n_materials, original->shape);
+  }
+  return s;
+}
+
+// Eyes in front of the scene, high to one side, far away, and among the objects.
+const glm::dvec3 kEyes[] = {{4, 3, 5}, {0, 8, 6}, {4, 3, 30}, {4, 3, -5}};
+
+TEST(KindsExactness, RandomScenesOfEveryKindRenderTheSameWithAndWithoutSpecialization) {
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    Rng rng(seed);
+    const bool translucent = seed % 2 == 1;
+    Scene scene = kinds_scene(rng, translucent);
+    ASSERT_FALSE(prepare_scene<double>(scene, RenderOptions{}, 0, 2).shape_bvh.empty());
+    for (const glm::dvec3& eye : kEyes) {
+      scene.cameras[0].viewpoint = eye;
+      for (Precision precision : {Precision::f64, Precision::f32})
+        for (int spp : {1, 4}) {
+          SCOPED_TRACE("seed " + std::to_string(seed) + " eye " + std::to_string(eye.x) + "," +
+                       std::to_string(eye.y) + "," + std::to_string(eye.z) + " " +
+                       std::string(to_string(precision)) + " spp " + std::to_string(spp));
+          RenderOptions o;
+          o.precision = precision;
+          o.spp = spp;
+          // The camera's window at fewer pixels: the plain loops are slow.
+          o.width = spp == 1 ? 20 : 12;
+          o.height = spp == 1 ? 15 : 9;
+          RenderStats stats;
+          const Image fast = render_image(scene, o, 2, &stats);
+          ASSERT_EQ(fast.width, o.width);
+          for (const char* part : {"bvh", "screen-bins"})
+            EXPECT_NE(std::find(stats.parts.begin(), stats.parts.end(), part), stats.parts.end())
+                << part;
+          EXPECT_EQ(std::find(stats.parts.begin(), stats.parts.end(), "light-buffers") !=
+                        stats.parts.end(),
+                    !translucent);
+          o.specialize = false;
+          const Image plain = render_image(scene, o, 2);
+          ASSERT_EQ(plain.rgb.size(), fast.rgb.size());
+          int differ = 0, first = -1;
+          for (size_t i = 0; i < fast.rgb.size(); ++i)
+            if (fast.rgb[i] != plain.rgb[i]) {
+              if (first < 0) first = static_cast<int>(i);
+              ++differ;
+            }
+          EXPECT_EQ(differ, 0) << "first at pixel " << first / 3 % o.width << ","
+                               << first / 3 / o.width;
+        }
+    }
+  }
+}
+
+template <class T>
+bool same(const Hit<T>& a, const Hit<T>& b) {
+  return a.object == b.object && std::memcmp(&a.t, &b.t, sizeof(T)) == 0;
+}
+
+// Rays from around and inside the scene, and secondary rays leaving the hit points (from
+// either side of the object hit), with finite and infinite limits.
+template <class T>
+void expect_same_answers(const Scene& scene, Rng& rng, int rays) {
+  RenderOptions off;
+  off.specialize = false;
+  const PreparedScene<T> loop = prepare_scene<T>(scene, off, 0);
+  const PreparedScene<T> fast = prepare_scene<T>(scene, RenderOptions{}, 0, 2);
+  ASSERT_TRUE(loop.bvh.empty());
+  ASSERT_TRUE(loop.shape_bvh.empty());
+  ASSERT_FALSE(fast.bvh.empty());
+  ASSERT_FALSE(fast.shape_bvh.empty()) << "the shapes must be behind their hierarchy";
+  ASSERT_GE(fast.shapes.size(), 8u);
+  const Tracer<T> a(loop), b(fast);
+  const int objects =
+      static_cast<int>(loop.spheres.size() + loop.planes.size() + loop.shapes.size());
+  const glm::dvec3 mid = (kLo + kHi) / 2.0;
+  int hits = 0, shape_hits = 0, blocked = 0;
+  for (int i = 0; i < rays; ++i) {
+    const Vec3<T> o(mid + rng.point(rng.chance(0.3) ? 20 : 7));
+    Vec3<T> d(rng.direction());
+    if (rng.chance(0.05)) d = Vec3<T>(0, 0, rng.chance(0.5) ? -1 : 1);
+    if (rng.chance(0.05)) d = Vec3<T>(0, rng.chance(0.5) ? -1 : 1, 0);
+    const T inf = std::numeric_limits<T>::infinity();
+    const T t_max = rng.chance(0.5) ? inf : static_cast<T>(rng.in(0, 25));
+    Origin from;
+    if (rng.chance(0.3)) from = {rng.below(objects), rng.chance(0.5)};
+    const Hit<T> h1 = a.closest(o, d, from, t_max), h2 = b.closest(o, d, from, t_max);
+    ASSERT_TRUE(same(h1, h2)) << "ray " << i << ": loop " << h1.object << " t " << h1.t
+                              << ", hierarchy " << h2.object << " t " << h2.t;
+    if (h1.object < 0) continue;
+    ++hits;
+    shape_hits += h1.object >= fast.shape_base();
+    const Vec3<T> p = o + h1.t * d;
+    const Origin leaving{h1.object, rng.chance(0.5)};
+    const Vec3<T> d2(rng.direction());
+    const Hit<T> s1 = a.closest(p, d2, leaving, inf), s2 = b.closest(p, d2, leaving, inf);
+    ASSERT_TRUE(same(s1, s2)) << "secondary ray " << i << ": loop " << s1.object << " t " << s1.t
+                              << ", hierarchy " << s2.object << " t " << s2.t;
+    const T dist = static_cast<T>(rng.in(0, 20));
+    const bool o1 = a.occluded(p, d2, leaving, dist);
+    ASSERT_EQ(o1, b.occluded(p, d2, leaving, dist)) << "shadow ray " << i;
+    blocked += o1;
+    const Vec3<T> f1 = a.transmittance(p, d2, leaving, dist),
+                  f2 = b.transmittance(p, d2, leaving, dist);
+    ASSERT_EQ(std::memcmp(&f1, &f2, sizeof f1), 0) << "transmittance " << i;
+  }
+  // The rays must reach every answer, or the comparison proves little.
+  EXPECT_GT(hits, rays / 10);
+  EXPECT_GT(shape_hits, rays / 50);
+  EXPECT_GT(blocked, rays / 50);
+}
+
+TEST(KindsExactness, ClosestOccludedAndTransmittanceEqualTheLoopsOnRandomScenes) {
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    Rng rng(100 + seed);
+    const Scene scene = kinds_scene(rng, seed % 2 == 0);
+    expect_same_answers<double>(scene, rng, 3000);
+    expect_same_answers<float>(scene, rng, 3000);
+  }
+}
+
+TEST(KindsExactness, ConesTallerThanTheirApexEqualTheLoop) {
+  // A cone's radius 4 − 2y/3 is 0 at y = 6; these are 10 to 30 high, so they widen again
+  // above their apex (|r(y)|) beyond the radius 4 of their base: their boxes must hold that.
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    Rng rng(200 + seed);
+    Scene scene = kinds_scene(rng, false);
+    for (int i = 0; i < 4; ++i)
+      add(scene, EntityKind::revsurf, 0,
+          Revsurf{1, point_in_box(rng), rng.direction(), rng.in(10, 30)});
+    expect_same_answers<double>(scene, rng, 3000);
+  }
+}
+
+}  // namespace
+}  // namespace rayfarm
