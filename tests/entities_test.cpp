@@ -219,13 +219,10 @@ TEST(Revsurf, ConeIsHitWhereItsRadiusMeetsTheRayWithTheGradientNormal) {
   EXPECT_EQ(centre(img, 2), round_byte(9 * (2 / root13) / 10));
 }
 
-// Disabled, undecided: both profiles (geometry/revsurf.h, shared since main's single root
-// finder) continue a cone taller than 6 above its apex as a second cone of radius |r(y)|,
-// and size its box for that. Before, the cpsc102 profile ended it at the apex (it kept only
-// roots with r(y) >= 0) while the lecture did not. COURSE §10 calls the profile a radius and
-// no course scene is taller than 6 (revsurfa: height 6), so the images cannot say which the
-// reference program drew. Enable this once the rule is decided.
-TEST(Revsurf, DISABLED_ConeEndsAtItsApex) {
+// A cone written taller than 6 ends at its apex in both profiles: r(y) = 4 − 2y/3 is 0 there,
+// and a negative radius is no surface (not a second cone above). No course scene is taller
+// than 6 (revsurfa: exactly 6), so the reference images cannot contradict it.
+TEST(Revsurf, ConeEndsAtItsApex) {
   // Height 9, but r(y) = 4 − 2y/3 reaches 0 at y = 6: above it there would be no surface
   // (a negative radius is none). The centre ray runs at axial height 7.5, where |r| is 1,
   // and would go on to the wall z = −20, 25 away: 11/25 = 0.44 -> 112.

@@ -26,10 +26,14 @@ inline double revsurf_radius(int surfer, double y, double* slope = nullptr) {
   }
 }
 
-// The largest |r(y)| for 0 <= y <= height.
-inline double revsurf_max_radius(int surfer, double height) {
-  return surfer == 1 ? std::max(4.0, std::abs(4 - 2.0 / 3 * height)) : 1.5;
+// The cone's radius reaches 0 at y = 6: a radius cannot be negative, so the cone ends at
+// its apex, whatever height is written.
+inline double revsurf_top(int surfer, double height) {
+  return surfer == 1 ? std::min(height, 6.0) : height;
 }
+
+// The largest r(y) for 0 <= y <= height.
+inline double revsurf_max_radius(int surfer, double /*height*/) { return surfer == 1 ? 4.0 : 1.5; }
 
 // A ray in the surface's frame: y0 + t·dy along the axis, r0 + t·rd across it, given by
 // |r0|², r0·rd and |rd|².
@@ -40,6 +44,7 @@ struct RevsurfRay {
 // The first t > 0 at which the ray crosses the surface within 0 <= y <= height, or -1.
 // `own`: the ray leaves the surface itself; the crossing it starts on does not count.
 inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay& r, bool own) {
+  height = revsurf_top(surfer, height);
   double lo = 0, hi = 1e300;
   if (r.dy != 0) {
     double t1 = -r.y0 / r.dy, t2 = (height - r.y0) / r.dy;
