@@ -74,6 +74,9 @@ bool valid_value_count(ValueKind kind, int n);
 // What is wrong with one number of a value of this attribute ("must be > 0", ...); empty when
 // it is in range. A direction's other rule (not all zero) is is_zero_vector.
 std::string value_problem(const AttrSpec& attr, double v);
+// Whether value_problem would find nothing, without building its message (the loader's
+// fast path asks this of every number).
+bool value_in_range(const AttrSpec& attr, double v);
 inline bool is_zero_vector(const double* v) { return v[0] == 0 && v[1] == 0 && v[2] == 0; }
 
 // Names as the format allows them: [A-Za-z_][A-Za-z0-9_.-]*

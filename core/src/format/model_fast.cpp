@@ -133,7 +133,7 @@ class FastLoader {
       while (lex_.peek().kind == Token::word && starts_like_number(lex_.peek().text)) {
         if (n == hi) return false;
         const std::optional<double> x = parse_number(lex_.next().text);
-        if (!x || !value_problem(*attr, *x).empty()) return false;
+        if (!x || !value_in_range(*attr, *x)) return false;
         values.v[k][n++] = *x;
       }
       if (!valid_value_count(attr->kind, n)) return false;

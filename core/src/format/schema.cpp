@@ -34,10 +34,19 @@ const Keywords& keywords() {
 }  // namespace
 
 const EntitySpec* find_entity(std::string_view keyword) {
-  for (int k = 0; k < kEntityKinds; ++k) {
-    const EntitySpec& spec = entity_spec(static_cast<EntityKind>(k));
-    if (spec.keyword == keyword) return &spec;
-  }
+  // Every word of a model file that could start an entity is looked up: compare lengths
+  // and first letters before the rest.
+  static const auto table = [] {
+    std::array<std::pair<std::string_view, const EntitySpec*>, kEntityKinds> t{};
+    for (int k = 0; k < kEntityKinds; ++k) {
+      const EntitySpec& spec = entity_spec(static_cast<EntityKind>(k));
+      t[k] = {spec.keyword, &spec};
+    }
+    return t;
+  }();
+  if (keyword.empty()) return nullptr;
+  for (const auto& [word, spec] : table)
+    if (word.size() == keyword.size() && word[0] == keyword[0] && word == keyword) return spec;
   return nullptr;
 }
 
@@ -85,6 +94,21 @@ bool valid_value_count(ValueKind kind, int n) {
 }
 
 bool is_word_kind(ValueKind kind) { return kind == V::material_ref || kind == V::word; }
+
+bool value_in_range(const AttrSpec& attr, double v) {
+  if (!std::isfinite(v)) return false;
+  switch (attr.kind) {
+    case V::pixel_dims: return v >= 1 && v <= 65535 && v == std::floor(v);
+    case V::window_dims:
+    case V::positive: return v > 0;
+    case V::colour:
+    case V::nonnegative: return v >= 0;
+    case V::fraction: return v >= 0 && v <= 1;
+    case V::angle: return v > 0 && v < 180;
+    case V::integer: return v == std::floor(v) && v >= attr.lo && v <= attr.hi;
+    default: return true;
+  }
+}
 
 std::string value_problem(const AttrSpec& attr, double v) {
   if (!std::isfinite(v)) return "must be a finite number";

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "rayfarm/options.h"
@@ -22,6 +23,21 @@ struct Film {
     const double inv = static_cast<double>(1.0L / n);
     return static_cast<double>(static_cast<long double>(sum) * inv);
   }
+  // to_byte of n channels, its choices made once.
+  void to_bytes(const double* c, std::size_t n, std::uint8_t* out) const {
+    if (extended)
+      for (std::size_t i = 0; i < n; ++i) out[i] = to_byte(c[i]);
+    else if (rounding == Rounding::nearest)
+      for (std::size_t i = 0; i < n; ++i) out[i] = nearest(c[i]);
+    else
+      for (std::size_t i = 0; i < n; ++i) out[i] = to_byte(c[i]);
+  }
+
+  static std::uint8_t nearest(double c) {
+    c = c > 0 ? (c < 1 ? c : 1.0) : 0.0;
+    return static_cast<std::uint8_t>(std::floor(255 * c + 0.5));
+  }
+
   std::uint8_t to_byte(double c) const {
     c = c > 0 ? (c < 1 ? c : 1.0) : 0.0;  // NaN to 0: no NaN reaches a pixel
     if (extended) {

@@ -119,8 +119,7 @@ class TiledRender final : public RenderJob {
     std::uint8_t* out = bytes.data();
     const glm::dvec3* c = colours.data();
     if (passes_ == 1) {
-      for (size_t i = 0; i < colours.size(); ++i, ++c)
-        for (int k = 0; k < 3; ++k) *out++ = film_.to_byte((*c)[k]);
+      film_.to_bytes(&colours[0][0], colours.size() * 3, out);
       tile_error_[tile] = tile_error;
       return true;
     }

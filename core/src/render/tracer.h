@@ -310,7 +310,7 @@ class Tracer {
     Surface s;
     const int ns = s_.plane_base(), np = static_cast<int>(s_.planes.size());
     int material;
-    Vec3<T> texel(1);
+    std::optional<Vec3<T>> texel;
     const PreparedPlane<T>* tiles = nullptr;
     if (object < ns) {
       const PreparedSphere<T>& sp = s_.spheres[object];
@@ -327,7 +327,7 @@ class Tracer {
       const PreparedShape<T>& sh = s_.shapes[object - ns - np];
       s.n = shape_normal(sh, p);
       material = sh.material;
-      texel = shape_texel(sh, p);
+      if (sh.kind == PreparedShape<T>::tex_plane) texel = shape_texel(sh, p);
     }
     // Two-sided: the normal faces the incoming ray; from inside a sphere it points inward.
     s.inside = glm::dot(s.n, dir) > 0;
@@ -343,8 +343,8 @@ class Tracer {
       }
       if (!odd) colours = &s_.materials[tiles->alt_material];  // odd: the plane's own
     }
-    s.ambient = colours->ambient * texel;
-    s.diffuse = colours->diffuse * texel;
+    s.ambient = texel ? colours->ambient * *texel : colours->ambient;
+    s.diffuse = texel ? colours->diffuse * *texel : colours->diffuse;
     return s;
   }
 
