@@ -39,7 +39,7 @@ struct RenderStats {
 // The version of the renderer's output: part of every content key, so a build that renders
 // any byte differently never shares cached results with one that does not. Bump it with
 // every change to pixels (tests/golden_test.cpp pins the bundled scenes' bytes).
-inline constexpr int kRenderVersion = 3;
+inline constexpr int kRenderVersion = 4;
 
 // The largest images a job accepts (the image, and with spp > 1 also 48 bytes of sums per
 // pixel, must fit in memory).

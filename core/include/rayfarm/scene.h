@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -139,7 +140,34 @@ struct Revsurf {  // a surface of revolution with one of the course's profiles
   bool operator==(const Revsurf&) const = default;
 };
 
-using Shape = std::variant<Sphere, Plane, FinitePlane, TiledPlane, TexPlane, Triangle, Revsurf>;
+// A shape kept out of line, so that objects stay small for the spheres and planes a scene
+// has by the hundred thousand (their memory is most of a large scene's load time). Shared
+// and immutable; compares by value.
+template <class T>
+class Boxed {
+ public:
+  Boxed(T value) : p_(std::make_shared<const T>(std::move(value))) {}  // NOLINT: implicit on purpose
+  const T& operator*() const { return *p_; }
+  const T* get() const { return p_.get(); }
+  bool operator==(const Boxed& o) const { return *p_ == *o.p_; }
+
+ private:
+  std::shared_ptr<const T> p_;
+};
+
+using Shape = std::variant<Sphere, Plane, Boxed<FinitePlane>, Boxed<TiledPlane>, Boxed<TexPlane>,
+                           Boxed<Triangle>, Boxed<Revsurf>>;
+
+// Calls f with the shape itself, whichever way it is kept.
+template <class F>
+decltype(auto) visit_shape(F&& f, const Shape& shape) {
+  return std::visit(
+      [&](const auto& s) -> decltype(auto) {
+        if constexpr (requires { s.get(); }) return f(*s);
+        else return f(s);
+      },
+      shape);
+}
 
 struct Object {
   std::string name;
@@ -150,7 +178,12 @@ struct Object {
 
   template <class S>
   const S* as() const {
-    return std::get_if<S>(&shape);
+    if constexpr (std::is_same_v<S, Sphere> || std::is_same_v<S, Plane>) {
+      return std::get_if<S>(&shape);
+    } else {
+      const Boxed<S>* b = std::get_if<Boxed<S>>(&shape);
+      return b ? b->get() : nullptr;
+    }
   }
   bool operator==(const Object&) const = default;
 };

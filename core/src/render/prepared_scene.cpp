@@ -295,7 +295,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     }
   }
   for (const Object& o : scene.objects)
-    if (auto shape = std::visit(make, o.shape)) {
+    if (auto shape = visit_shape(make, o.shape)) {
       shape->material = o.material;
       p.shapes.push_back(*shape);
     }

@@ -198,6 +198,8 @@ RefScene prepare_reference(const Scene& scene, const RenderOptions& options, int
   s.height = options.height > 0 ? options.height : cam.height;
   s.world_width = cam.world_width;
   s.world_height = cam.world_height;
+  s.texel_width = R(static_cast<X>(cam.world_width) / cam.width);
+  s.texel_height = R(static_cast<X>(cam.world_height) / cam.height);
   s.eye = v3(cam.viewpoint);
   for (int c = 0; c < 3; ++c) s.background[c] = std::clamp(options.background[c], 0.0, 1.0);
   s.max_dist = options.effective_max_dist();
@@ -208,7 +210,7 @@ RefScene prepare_reference(const Scene& scene, const RenderOptions& options, int
   for (const Material& m : scene.materials) s.materials.push_back(material_of(m));
   const Builder build{scene};
   for (const Object& obj : scene.objects) {
-    RefObject o = std::visit(build, obj.shape);
+    RefObject o = visit_shape(build, obj.shape);
     o.material = obj.material;
     s.objects.push_back(o);
   }

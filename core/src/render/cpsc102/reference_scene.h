@@ -69,6 +69,8 @@ struct RefLight {
 struct RefScene {
   int width = 0, height = 0;
   double world_width = 0, world_height = 0;
+  // A texel of a mode-1 texplane is a pixel of the camera's own size, whatever is rendered.
+  double texel_width = 0, texel_height = 0;
   V3 eye;
   V3 background;
   double max_dist = 20;

@@ -169,10 +169,8 @@ void ReferenceTracer::surface(int k, const V3& p, V3& ambient, V3& diffuse) cons
       t = texel(img, qx, qy, o.width, o.height);
     } else {
       // One texel per pixel of world size, repeated.
-      const double px = R(static_cast<X>(s_.world_width) / s_.width);
-      const double py = R(static_cast<X>(s_.world_height) / s_.height);
-      int tx = saturating_trunc(static_cast<X>(qx) / px) % img.width;
-      int ty = saturating_trunc(static_cast<X>(qy) / py) % img.height;
+      int tx = saturating_trunc(static_cast<X>(qx) / s_.texel_width) % img.width;
+      int ty = saturating_trunc(static_cast<X>(qy) / s_.texel_height) % img.height;
       if (tx < 0) tx += img.width;  // only off the window, where no hit is
       if (ty < 0) ty += img.height;
       t = img.rgb.data() + 3 * (static_cast<long long>(img.height - 1 - ty) * img.width + tx);
