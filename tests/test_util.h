@@ -155,6 +155,7 @@ inline void expect_same_scene(const Scene& a, const Scene& b) {
     EXPECT_EQ(a.materials[i].diffuse, b.materials[i].diffuse);
     EXPECT_EQ(a.materials[i].specular, b.materials[i].specular);
     EXPECT_EQ(a.materials[i].shininess, b.materials[i].shininess);
+    EXPECT_EQ(a.materials[i].transparency, b.materials[i].transparency);
   }
   ASSERT_EQ(a.lights.size(), b.lights.size());
   for (size_t i = 0; i < a.lights.size(); ++i) {
@@ -162,6 +163,13 @@ inline void expect_same_scene(const Scene& a, const Scene& b) {
     EXPECT_EQ(a.lights[i].location, b.lights[i].location);
     EXPECT_EQ(a.lights[i].emissivity, b.lights[i].emissivity);
     EXPECT_EQ(a.lights[i].kind, b.lights[i].kind);
+    EXPECT_EQ(a.lights[i].aim, b.lights[i].aim);
+    EXPECT_EQ(a.lights[i].theta, b.lights[i].theta);
+    EXPECT_EQ(a.lights[i].normal, b.lights[i].normal);
+    EXPECT_EQ(a.lights[i].point, b.lights[i].point);
+    EXPECT_TRUE(a.lights[i].window == b.lights[i].window);
+    EXPECT_EQ(a.lights[i].texture, b.lights[i].texture);
+    EXPECT_EQ(a.lights[i].mode, b.lights[i].mode);
   }
   ASSERT_EQ(a.textures.size(), b.textures.size());
   for (size_t i = 0; i < a.textures.size(); ++i) {

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdint>
 #include <glm/vec3.hpp>
+#include <initializer_list>
 #include <limits>
 #include <span>
 #include <vector>
@@ -55,6 +56,18 @@ struct BvhBuildOptions {
   int threads = 1;   // the result does not depend on it
   int max_leaf = 4;  // a larger set is always split when it can be
 };
+
+// The smallest box around some points.
+inline BvhBox box_around(std::initializer_list<glm::dvec3> points) {
+  BvhBox b{glm::dvec3(std::numeric_limits<double>::infinity()),
+           glm::dvec3(-std::numeric_limits<double>::infinity())};
+  for (const glm::dvec3& q : points)
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = std::min(b.lo[a], q[a]);
+      b.hi[a] = std::max(b.hi[a], q[a]);
+    }
+  return b;
+}
 
 // Builds the hierarchy; empty when there are no boxes or their coordinates do not fit the
 // float nodes comfortably (the caller then keeps its plain loop).

@@ -105,15 +105,7 @@ struct ShapeMaker {
 template <class T>
 BvhBox shape_box(const PreparedShape<T>& s) {
   const glm::dvec3 o(s.point), u(s.u), v(s.v), a(s.normal);
-  auto box_of = [](std::initializer_list<glm::dvec3> points) {
-    BvhBox b{glm::dvec3(std::numeric_limits<double>::infinity()),
-             glm::dvec3(-std::numeric_limits<double>::infinity())};
-    for (const glm::dvec3& q : points) {
-      b.lo = glm::min(b.lo, q);
-      b.hi = glm::max(b.hi, q);
-    }
-    return b;
-  };
+  const auto box_of = box_around;
   if (s.kind == PreparedShape<T>::revsurf) {
     const double r = revsurf_max_radius(s.surfer, static_cast<double>(s.height));
     const glm::dvec3 top = o + static_cast<double>(s.height) * a;

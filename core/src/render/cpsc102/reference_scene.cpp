@@ -60,13 +60,18 @@ struct Builder {
     plane_part(o, p);
     return o;
   }
+  // A plane with a window: its frame and size.
+  void window_part(RefObject& o, const Plane& p, const Window& w) const {
+    plane_part(o, p);
+    o.frame = frame_of(o.normal, v3(w.xdir));
+    o.width = w.width;
+    o.height = w.height;
+  }
+
   RefObject operator()(const FinitePlane& f) const {
     RefObject o;
     o.kind = RefObject::fplane;
-    plane_part(o, f.plane);
-    o.frame = frame_of(o.normal, v3(f.window.xdir));
-    o.width = f.window.width;
-    o.height = f.window.height;
+    window_part(o, f.plane, f.window);
     return o;
   }
   RefObject operator()(const TiledPlane& t) const {
@@ -83,10 +88,7 @@ struct Builder {
   RefObject operator()(const TexPlane& t) const {
     RefObject o;
     o.kind = RefObject::texplane;
-    plane_part(o, t.plane);
-    o.frame = frame_of(o.normal, v3(t.window.xdir));
-    o.width = t.window.width;
-    o.height = t.window.height;
+    window_part(o, t.plane, t.window);
     o.texture = texture(t.texture);
     o.mode = t.mode;
     return o;
@@ -128,15 +130,7 @@ struct Builder {
 // rounding of the program's discriminant (b² − 4ac, about eps·|base − centre|²/r wide)
 // could exceed the hierarchy's margin.
 std::optional<BvhBox> box_of(const RefObject& o, double extent) {
-  auto around = [](std::initializer_list<glm::dvec3> points) {
-    BvhBox b{glm::dvec3(std::numeric_limits<double>::infinity()),
-             glm::dvec3(-std::numeric_limits<double>::infinity())};
-    for (const glm::dvec3& q : points) {
-      b.lo = glm::min(b.lo, q);
-      b.hi = glm::max(b.hi, q);
-    }
-    return b;
-  };
+  const auto around = box_around;
   auto g = [](const V3& v) { return glm::dvec3(v.x, v.y, v.z); };
   switch (o.kind) {
     case RefObject::sphere: {
