@@ -67,5 +67,35 @@ TEST(ReferenceProfile, HierarchyGivesTheLoopsBytesForEveryKind) {
   }
 }
 
+// Reflection and transmission branch at every translucent mirror: a stack of them with a
+// deep max_depth would double the rays per bounce (2^40 here). Each profile stops spawning
+// past a budget per primary ray, and so renders.
+TEST(BranchingRays, AStackOfTranslucentMirrorsRendersWithinABudget) {
+  // A stack of parallel planes that reflect and let through everything: every ray that
+  // meets one goes on both ways into the stack.
+  std::string text =
+      "camera c { pixeldim 4 3 worlddim 8 6 viewpoint 4 3 6 }\n"
+      "material glassy_mirror { ambient 1 1 1 diffuse 1 1 1 specular 1 transparency 1 }\n"
+      "light l { location 4 3 2 }\n";
+  for (int i = 1; i <= 10; ++i)
+    text += "plane p" + std::to_string(i) + " { material glassy_mirror normal 0 0 1 point 0 0 -" +
+            std::to_string(i) + " }\n";
+  const Scene scene = test::scene_from(text);
+  for (const char* profile : {"lecture", "cpsc102"}) {
+    SCOPED_TRACE(profile);
+    RenderOptions o;
+    ASSERT_FALSE(apply_option(o, "profile", profile));
+    ASSERT_FALSE(apply_option(o, "max_depth", "40"));
+    ASSERT_FALSE(apply_option(o, "max_dist", "unlimited"));
+    RenderStats stats;
+    const Image image = test::render(scene, o, 2, &stats);
+    EXPECT_EQ(image.width, 4);
+    // Without the budget: about 2^40 rays a pixel. The last level may still spawn both of
+    // its rays, so the bound is twice the budget.
+    EXPECT_GT(stats.reflection_rays, 12u * (1u << 13));
+    EXPECT_LE(stats.reflection_rays, 12u * 2 * (1u << 14));
+  }
+}
+
 }  // namespace
 }  // namespace rayfarm

@@ -235,6 +235,8 @@ class Tracer {
 
  private:
   static constexpr int kMaxCrossings = 64;
+  // Levels (hits) one primary ray may spawn once transparency lets rays branch.
+  static constexpr std::size_t kMaxBranchingLevels = 1 << 14;
 
   static bool remember(int* last_blocker, int sphere) {
     if (last_blocker) *last_blocker = sphere;
@@ -430,7 +432,10 @@ class Tracer {
       colour = clamp01(colour);
       levels_.push_back({colour, Vec3<T>(0)});
 
-      if (s_.features.transparency && m.transparency > 0 && depth < s_.max_depth) {
+      // Reflection and transmission together branch: a budget of levels per primary ray
+      // keeps a hall of translucent mirrors from doubling its rays at every bounce.
+      const bool budget = !s_.features.transparency || levels_.size() < kMaxBranchingLevels;
+      if (s_.features.transparency && m.transparency > 0 && depth < s_.max_depth && budget) {
         levels_[index].keep = 1 - m.transparency;
         levels_[index].filter = m.filter;
         // Straight on through the surface: into the object it was outside of, and out again.
@@ -439,7 +444,7 @@ class Tracer {
         ++counts.reflection;
       }
       const bool reflect = s_.features.reflection && m.reflects && depth < s_.max_depth &&
-                           !(path_weight * m.max_specular < s_.bailout);
+                           budget && !(path_weight * m.max_specular < s_.bailout);
       if (!reflect) return;
       levels_[index].weight = m.specular;
       path_weight *= m.max_specular;

@@ -249,7 +249,7 @@ V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_
 
 V3 ReferenceTracer::trace(const V3& base, int base_owner, const V3& dir, double total, int last,
                           int depth) {
-  if (total > s_.max_dist) return s_.background;
+  if (total > s_.max_dist || rays_left_-- <= 0) return s_.background;
   double t;
   const int k = closest(base, dir, last, t);
   if (k < 0) return s_.background;
@@ -289,6 +289,7 @@ V3 ReferenceTracer::trace(const V3& base, int base_owner, const V3& dir, double 
 V3 ReferenceTracer::primary(double wx, double wy) {
   ++counts.primary;
   const V3 dir = unit(sub(V3{wx, wy, 0}, s_.eye));
+  rays_left_ = kMaxRaysPerPixel;
   return trace(s_.eye, -1, dir, 0, -1, 0);
 }
 

@@ -15,6 +15,9 @@ namespace rayfarm::cpsc102 {
 // The program recursed for every reflected and transmitted ray; so does this tracer, up to
 // this depth (a thread's stack holds it with room to spare).
 inline constexpr int kMaxRecursion = 1000;
+// Rays one primary ray may spawn: reflection and transmission together branch, so a scene
+// of translucent mirrors would otherwise double its rays at every bounce.
+inline constexpr int kMaxRaysPerPixel = 1 << 14;
 
 class ReferenceTracer {
  public:
@@ -51,6 +54,7 @@ class ReferenceTracer {
   // to leave). The program tested every object in every search; with a hierarchy that skips
   // some, these are tested anyway, so their stored points are the program's.
   std::vector<int> watched_;
+  int rays_left_ = 0;  // of the current primary ray's budget
 };
 
 }  // namespace rayfarm::cpsc102
