@@ -54,6 +54,15 @@ class LecturePipeline {
     return true;
   }
 
+  const PreparedScene<T>& scene() const { return s_; }
+
+  // The world point on the screen of pixel (x, image row r) in pass `pass`: the one
+  // render_tile traces (whose closest hit, found through screen bins or not, is the one
+  // Tracer::closest finds).
+  Vec3<T> screen_point_of(int x, int r, int pass) const {
+    return pixel_point(x, s_.height - 1 - r, pass);
+  }
+
  private:
   struct PrimaryRay {
     std::optional<Vec3<T>> dir;

@@ -372,6 +372,21 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   return p;
 }
 
+std::vector<int> object_sources(const Scene& scene) {
+  std::vector<int> out;
+  out.reserve(scene.objects.size());
+  auto add = [&](auto&& belongs) {
+    for (std::size_t i = 0; i < scene.objects.size(); ++i)
+      if (belongs(scene.objects[i])) out.push_back(static_cast<int>(i));
+  };
+  auto sphere = [](const Object& o) { return o.as<Sphere>() != nullptr; };
+  auto plane = [](const Object& o) { return o.as<Plane>() || o.as<TiledPlane>(); };
+  add(sphere);
+  add(plane);
+  add([&](const Object& o) { return !sphere(o) && !plane(o); });
+  return out;
+}
+
 template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOptions&, int, int);
 template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int, int);
 template void build_sphere_bvh<float>(PreparedScene<float>&, int);

@@ -125,6 +125,10 @@ template <class T>
 PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera,
                                int build_threads = 0);
 
+// Each object number of a prepared scene (spheres, then planes, then the other shapes, each
+// in file order): its index in scene.objects.
+std::vector<int> object_sources(const Scene& scene);
+
 // Puts the spheres behind a hierarchy (whatever their number); used by prepare_scene.
 template <class T>
 void build_sphere_bvh(PreparedScene<T>& scene, int threads);

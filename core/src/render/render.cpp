@@ -12,6 +12,7 @@
 #include "render/cpsc102/reference_pipeline.h"
 #include "render/film.h"
 #include "render/lecture_pipeline.h"
+#include "render/render_checks.h"
 
 namespace rayfarm {
 namespace {
@@ -210,8 +211,8 @@ double RenderStats::progress() const {
          spp_target;
 }
 
-std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOptions& options,
-                                             std::string* error) {
+std::optional<int> check_render(const Scene& scene, const RenderOptions& options,
+                                std::string* error) {
   auto camera = scene.find_camera(options.camera);
   if (!camera) {
     if (error) {
@@ -220,7 +221,7 @@ std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOpt
       *error = "no camera named '" + options.camera + "'" +
                (names.empty() ? "" : " (cameras: " + names + ")");
     }
-    return nullptr;
+    return std::nullopt;
   }
   // Bounds on what one process can hold: the image, and with spp > 1 the per-pixel sums.
   const Camera& cam = scene.cameras[*camera];
@@ -231,29 +232,37 @@ std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOpt
     if (error)
       *error = "the image has " + std::to_string(pixels) + " pixels; at most " +
                std::to_string(limit) + (options.spp > 1 ? " with spp > 1" : "") + " can be rendered";
-    return nullptr;
+    return std::nullopt;
   }
   for (const Texture& t : scene.textures)
     if (!t.image) {
       if (error)
         *error = "texture '" + (t.name.empty() ? t.path : t.name) + "' ('" + t.path +
                  "') was not provided: textures are read with the scene";
-      return nullptr;
+      return std::nullopt;
     }
   if (std::string conflict = profile_conflict(options); !conflict.empty()) {
     if (error) *error = conflict;
-    return nullptr;
+    return std::nullopt;
   }
+  if (options.profile == Profile::cpsc102 &&
+      options.effective_max_depth() > cpsc102::kMaxRecursion) {
+    if (error)
+      *error = "the cpsc102 profile follows rays at most " +
+               std::to_string(cpsc102::kMaxRecursion) + " bounces deep; max_depth " +
+               std::to_string(options.effective_max_depth()) + " is more";
+    return std::nullopt;
+  }
+  return camera;
+}
+
+std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOptions& options,
+                                             std::string* error) {
+  const std::optional<int> camera = check_render(scene, options, error);
+  if (!camera) return nullptr;
   const Clock::time_point t0 = Clock::now();
   const Film film{options.effective_rounding(), options.profile == Profile::cpsc102};
   if (options.profile == Profile::cpsc102) {
-    if (options.effective_max_depth() > cpsc102::kMaxRecursion) {
-      if (error)
-        *error = "the cpsc102 profile follows rays at most " +
-                 std::to_string(cpsc102::kMaxRecursion) + " bounces deep; max_depth " +
-                 std::to_string(options.effective_max_depth()) + " is more";
-      return nullptr;
-    }
     cpsc102::ReferencePipeline pipeline(cpsc102::prepare_reference(scene, options, *camera));
     return std::make_unique<TiledRender<cpsc102::ReferencePipeline>>(
         std::move(pipeline), options, film, ms_between(t0, Clock::now()));

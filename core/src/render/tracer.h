@@ -13,6 +13,7 @@
 
 #include "render/prepared_scene.h"
 #include "render/ray_counts.h"
+#include "render/recorder.h"
 
 namespace rayfarm {
 
@@ -83,12 +84,18 @@ struct Hit {
   }
 };
 
-template <class T>
+// With kRecord, a tracer can write each path it traces to a recorder (explain.cpp); a
+// render's tracer has none of that code compiled in.
+template <class T, bool kRecord = false>
 class Tracer {
  public:
   explicit Tracer(const PreparedScene<T>& scene) : s_(scene) {}
 
   RayCounts counts;
+
+  // From now on each traced path is written to `recorder` (cleared by the caller per
+  // sample); null: none is.
+  void record(Recorder* recorder) requires kRecord { rec_ = recorder; }
 
   // The unit direction from the eye through the world point `target` on the screen; none
   // when the two coincide (or the distance overflows).
@@ -103,6 +110,11 @@ class Tracer {
   Vec3<T> primary(const Vec3<T>& target) {
     ++counts.primary;
     std::optional<Vec3<T>> dir = primary_direction(target);
+    if (!dir && recording()) {
+      const int h = rec_->begin(RecordedHit::Ray::primary, -1, 0);
+      rec_->hits[h].origin = triple(s_.eye);
+      rec_->hits[h].value = triple(s_.background);
+    }
     return dir ? trace(s_.eye, *dir, nullptr) : s_.background;
   }
 
@@ -237,6 +249,8 @@ class Tracer {
   static constexpr int kMaxCrossings = 64;
   // Levels (hits) one primary ray may spawn once transparency lets rays branch.
   static constexpr std::size_t kMaxBranchingLevels = 1 << 14;
+
+  bool recording() const { return kRecord && rec_; }
 
   static bool remember(int* last_blocker, int sphere) {
     if (last_blocker) *last_blocker = sphere;
@@ -401,6 +415,7 @@ class Tracer {
       if (l.reflected >= 0) c = clamp01(c + l.weight * levels_[l.reflected].value);
       l.value = c;
     }
+    if (recording()) record_levels();
     return levels_.front().value;
   }
 
@@ -418,6 +433,8 @@ class Tracer {
       Hit<T> hit =
           first && previous < 0 ? *first : closest(origin, dir, from, s_.max_dist - travelled);
       if (hit.object < 0) {
+        if (recording())
+          record_ray(origin, dir, from, travelled, depth, previous, parent, hit, nullptr);
         levels_.push_back({s_.background, Vec3<T>(0)});
         return;
       }
@@ -425,6 +442,7 @@ class Tracer {
       const Vec3<T> p = origin + hit.t * dir;
       const Surface sf = surface(hit.object, p, dir);
       const PreparedMaterial<T>& m = *sf.m;
+      if (recording()) record_ray(origin, dir, from, travelled, depth, previous, parent, hit, &sf);
 
       Vec3<T> colour = sf.ambient / r_total;
       if (s_.features.lights)
@@ -469,6 +487,9 @@ class Tracer {
     const bool remember = !s_.bvh.empty();  // small scenes: just loop
     for (std::size_t i = 0; i < s_.lights.size(); ++i) {
       const PreparedLight<T>& light = s_.lights[i];
+      RecordedLight* lr = recording()
+                              ? &rec_->light(static_cast<int>(levels_.size()), static_cast<int>(i))
+                              : nullptr;
       int* last_blocker = remember ? &blockers_[i] : nullptr;
       const LightBuffer* light_buffer =
           i < s_.light_buffers.size() && !s_.light_buffers[i].empty() ? &s_.light_buffers[i]
@@ -476,18 +497,36 @@ class Tracer {
       Vec3<T> l = light.location - p;
       T r = glm::length(l);
       // A light exactly at the shaded point has no direction: it contributes nothing.
-      if (!(r > 0) || !std::isfinite(r)) continue;
+      if (!(r > 0) || !std::isfinite(r)) {
+        if (lr) lr->status = RecordedLight::at_point;
+        continue;
+      }
       l /= r;
       T n_dot_l = glm::dot(n, l);
       // Near 0 the sign of N.L is the rounding noise of L = Lp - p (a light in the surface's
       // own plane): it would switch the light and its highlight on and off pixel by pixel.
       const T noise = 8 * std::numeric_limits<T>::epsilon() * (light.scale + point_scale) / r;
-      if (!(n_dot_l > noise)) continue;
+      if (lr) {
+        lr->distance = static_cast<double>(r);
+        lr->n_dot_l = static_cast<double>(n_dot_l);
+      }
+      if (!(n_dot_l > noise)) {
+        if (lr) lr->status = RecordedLight::faces_away;
+        continue;
+      }
       Vec3<T> e = light.emissivity / r;
-      if (light.kind != LightKind::point && !reaches(light, l, e)) continue;
+      if (light.kind != LightKind::point && !reaches(light, l, e)) {
+        if (lr)
+          lr->status = light.kind == LightKind::spot ? RecordedLight::outside_cone
+                                                     : RecordedLight::off_slide;
+        continue;
+      }
       // A material lights cannot change gets exact zeros, unless E/r overflowed (then the
       // NaN it makes must appear exactly as in the general path).
-      if (!m.lit && std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) continue;
+      if (!m.lit && std::isfinite(e.x) && std::isfinite(e.y) && std::isfinite(e.z)) {
+        if (lr) record_unlit(*lr, p, l, from, r - 4 * noise * r, e);
+        continue;
+      }
       if (s_.features.shadows) {
         ++counts.shadow;
         // A surface through the light itself (a light placed on an object) is not in the
@@ -495,13 +534,19 @@ class Tracer {
         const T reach = r - 4 * noise * r;
         if (s_.features.transparency) {
           const Vec3<T> through = transmittance(p, l, from, reach);
+          if (lr) record_shadow(*lr, p, l, from, reach, through == Vec3<T>(0));
           if (through == Vec3<T>(0)) continue;
           e *= through;
         } else if (occluded(p, l, from, reach, last_blocker, light_buffer)) {
+          if (lr) record_shadow(*lr, p, l, from, reach, true);
           continue;
         }
       }
       Vec3<T> term = sf.diffuse * n_dot_l;
+      if (lr) {
+        lr->emissivity = triple(e);
+        lr->diffuse = triple(e * term);
+      }
       if (s_.features.highlight && m.highlights) {
         T base;
         if (s_.blinn) {
@@ -513,8 +558,98 @@ class Tracer {
           base = glm::dot(rl, v);
         }
         term += m.specular * std::pow(base > 0 ? base : T(0), m.shininess);
+        if (lr) {
+          lr->highlight_base = static_cast<double>(base);
+          lr->specular = triple(e * (m.specular * std::pow(base > 0 ? base : T(0), m.shininess)));
+        }
       }
       colour += e * term;
+    }
+  }
+
+  // The recorder's entry for the ray just followed, whose hit (`sf` null: a miss) becomes
+  // level levels_.size().
+  void record_ray(const Vec3<T>& origin, const Vec3<T>& dir, Origin from, T travelled, int depth,
+                  int previous, int parent, const Hit<T>& hit, const Surface* sf) {
+    const RecordedHit::Ray ray = previous >= 0 ? RecordedHit::Ray::reflected
+                                 : parent >= 0 ? RecordedHit::Ray::transmitted
+                                               : RecordedHit::Ray::primary;
+    RecordedHit& rh = rec_->hits[rec_->begin(ray, previous >= 0 ? previous : parent, depth)];
+    rh.origin = triple(origin);
+    rh.direction = triple(dir);
+    rh.travelled = static_cast<double>(travelled);
+    if (!sf) {
+      // Only a finite max_dist can hide an object.
+      constexpr T kFar = std::numeric_limits<T>::max();
+      rh.capped = s_.max_dist < kFar && closest(origin, dir, from, kFar).object >= 0;
+      return;
+    }
+    rh.object = hit.object;
+    rh.t = static_cast<double>(hit.t);
+    rh.travelled = static_cast<double>(travelled + hit.t);
+    rh.point = triple(origin + hit.t * dir);
+    rh.normal = triple(sf->n);
+    rh.ambient = triple(sf->ambient);
+    rh.diffuse_colour = triple(sf->diffuse);
+    rh.specular = triple(sf->m->specular);
+    rh.shininess = static_cast<double>(sf->m->shininess);
+  }
+
+  // What the shadow ray to a light met: `blocked`, or else filtered by what it crossed.
+  void record_shadow(RecordedLight& lr, const Vec3<T>& p, const Vec3<T>& l, Origin from, T reach,
+                     bool blocked) const {
+    if (!rec_->blockers && !s_.features.transparency) {  // then nothing filters
+      lr.status = blocked ? RecordedLight::shadowed : RecordedLight::lit;
+      return;
+    }
+    lr.blocker = shadow_blocker(p, l, from, reach);
+    lr.status = blocked           ? RecordedLight::shadowed
+                : lr.blocker >= 0 ? RecordedLight::filtered
+                                  : RecordedLight::lit;
+  }
+
+  // The first opaque object a shadow ray meets before `dist` or, when there is none, the
+  // first translucent one; -1 when it meets nothing. Walks as transmittance() does.
+  int shadow_blocker(Vec3<T> o, const Vec3<T>& d, Origin from, T dist) const {
+    int first_filter = -1;
+    for (int steps = 0; steps < 4 * kMaxCrossings; ++steps) {
+      const Hit<T> hit = closest(o, d, from, dist);
+      if (hit.object < 0 || !(hit.t < dist)) break;
+      if (!(s_.materials[material_of(hit.object)].transparency > 0)) return hit.object;
+      if (first_filter < 0) first_filter = hit.object;
+      const Vec3<T> p = o + hit.t * d;
+      from = {hit.object, glm::dot(outward_normal(hit.object, p), d) < 0};
+      o = p;
+      dist -= hit.t;
+    }
+    return first_filter;
+  }
+
+  // A light on a material it cannot change, whose shadow ray the tracer skips: for the
+  // record, whether that ray would have reached the point.
+  void record_unlit(RecordedLight& lr, const Vec3<T>& p, const Vec3<T>& l, Origin from, T reach,
+                    const Vec3<T>& e) const {
+    lr.emissivity = triple(e);
+    if (!s_.features.shadows) return;
+    const Vec3<T> through = s_.features.transparency
+                                ? transmittance(p, l, from, reach)
+                                : Vec3<T>(closest(p, l, from, reach).t < reach ? 0 : 1);
+    record_shadow(lr, p, l, from, reach, through == Vec3<T>(0));
+    lr.emissivity = triple(e * through);
+  }
+
+  // The levels' colours, once folded, into the recorder (its hits are the levels).
+  void record_levels() {
+    for (std::size_t i = 0; i < levels_.size(); ++i) {
+      RecordedHit& rh = rec_->hits[i];
+      const Level& l = levels_[i];
+      rh.local = triple(l.local);
+      rh.value = triple(l.value);
+      rh.weight = triple(l.weight);
+      rh.keep = static_cast<double>(l.keep);
+      rh.filter = triple(l.filter);
+      rh.reflected = l.reflected;
+      rh.transmitted = l.transmitted;
     }
   }
 
@@ -537,6 +672,7 @@ class Tracer {
   std::vector<Level> levels_;
   std::vector<PendingRay> pending_;
   std::vector<int> blockers_;  // per light: the sphere that blocked its last shadow ray
+  Recorder* rec_ = nullptr;    // only with kRecord
 };
 
 }  // namespace rayfarm

@@ -5,6 +5,7 @@
 // is kept at every tile's row starts, and all of a pixel's samples are taken in one pass.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -47,7 +48,7 @@ class ReferencePipeline {
   bool render_tile(const TileBounds& b, int /*pass*/, std::vector<glm::dvec3>& out,
                    RayCounts& counts, double& error, Canceled&& canceled) const {
     out.resize(static_cast<size_t>(b.width()) * b.rows());
-    ReferenceTracer tracer(s_);
+    ReferenceTracer<> tracer(s_);
     error = 0;
     for (int r = b.r0; r < b.r1; ++r) {
       if (canceled()) return false;
@@ -65,15 +66,13 @@ class ReferencePipeline {
         V3 acc;
         double sum_sq[3] = {};
         for (int k = 0; k < s_.spp; ++k) {
-          const double fx = R(x + static_cast<X>(jitter(random)));
-          const double fy = R(y + static_cast<X>(jitter(random)));
-          const V3 c = tracer.primary(screen_x(fx), screen_y(fy));
+          const std::array<double, 2> w = jittered_point(random, x, y);
+          const V3 c = tracer.primary(w[0], w[1]);
           acc = add(acc, c);
           for (int i = 0; i < 3; ++i) sum_sq[i] += c[i] * c[i];
         }
-        const double inv = R(1.0L / s_.spp);
-        *px++ = {R(static_cast<X>(acc.x) * inv), R(static_cast<X>(acc.y) * inv),
-                 R(static_cast<X>(acc.z) * inv)};
+        const V3 value = mean_of(acc);
+        *px++ = {value.x, value.y, value.z};
         const double n = s_.spp;
         for (int i = 0; i < 3; ++i) {
           const double mean = acc[i] / n;
@@ -86,7 +85,37 @@ class ReferencePipeline {
     return true;
   }
 
+  const RefScene& scene() const { return s_; }
+
+  // The screen points of pixel (x, image row r)'s samples, in the order render_tile takes
+  // them: with one sample the pixel's own point, else its jittered points, the stream
+  // taken up where this pixel's part of it begins.
+  std::vector<std::array<double, 2>> sample_points(int x, int r) const {
+    const int y = s_.height - 1 - r;
+    if (s_.spp <= 1) return {{screen_x(x), screen_y(y)}};
+    const int x0 = x / kTileSize * kTileSize;
+    GlibcRandom random = starts_[static_cast<size_t>(y) * grid_.tiles_x + x / kTileSize];
+    random.discard(2ull * s_.spp * (x - x0));
+    std::vector<std::array<double, 2>> out;
+    for (int k = 0; k < s_.spp; ++k) out.push_back(jittered_point(random, x, y));
+    return out;
+  }
+
+  // A supersampled pixel's value from the sum of its samples, in the program's arithmetic.
+  V3 mean_of(const V3& sum) const {
+    const double inv = R(1.0L / s_.spp);
+    return {R(static_cast<X>(sum.x) * inv), R(static_cast<X>(sum.y) * inv),
+            R(static_cast<X>(sum.z) * inv)};
+  }
+
  private:
+  // The next sample's screen point of pixel (x, world row y).
+  std::array<double, 2> jittered_point(GlibcRandom& random, int x, int y) const {
+    const double fx = R(x + static_cast<X>(jitter(random)));
+    const double fy = R(y + static_cast<X>(jitter(random)));
+    return {screen_x(fx), screen_y(fy)};
+  }
+
   // random() / (2^31 − 1) − 0.5, as the program computed it.
   static double jitter(GlibcRandom& random) {
     return R(static_cast<X>(R(random.next() / 2147483647.0L)) - 0.5L);

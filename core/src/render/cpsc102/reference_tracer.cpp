@@ -30,7 +30,7 @@ V3 filtered(const V3& c, const std::uint8_t* t) {
 
 }  // namespace
 
-double ReferenceTracer::test(int k, const V3& base, const V3& dir) {
+double ReferenceSearch::test(int k, const V3& base, const V3& dir) {
   const RefObject& o = s_.objects[k];
   if (o.kind == RefObject::sphere) {
     const V3 v = sub(base, o.center);
@@ -86,7 +86,7 @@ double ReferenceTracer::test(int k, const V3& base, const V3& dir) {
   return t;
 }
 
-int ReferenceTracer::closest(const V3& base, const V3& dir, int skip, double& t) {
+int ReferenceSearch::closest(const V3& base, const V3& dir, int skip, double& t) {
   if (!s_.bvh.empty()) return closest_bvh(base, dir, skip, t);
   int best = -1;
   t = 0;
@@ -102,7 +102,7 @@ int ReferenceTracer::closest(const V3& base, const V3& dir, int skip, double& t)
   return best;
 }
 
-int ReferenceTracer::closest_bvh(const V3& base, const V3& dir, int skip, double& t) {
+int ReferenceSearch::closest_bvh(const V3& base, const V3& dir, int skip, double& t) {
   int best = -1;
   t = 0;
   auto consider = [&](int k) {
@@ -130,14 +130,14 @@ int ReferenceTracer::closest_bvh(const V3& base, const V3& dir, int skip, double
   return best;
 }
 
-V3 ReferenceTracer::normal_at(int k, const V3& p) const {
+V3 ReferenceSearch::normal_at(int k, const V3& p) const {
   const RefObject& o = s_.objects[k];
   if (o.kind == RefObject::sphere) return unit(sub(p, o.center));
   if (o.kind == RefObject::revsurf) return revsurf_normal(o, p);
   return o.normal;
 }
 
-void ReferenceTracer::surface(int k, const V3& p, V3& ambient, V3& diffuse) const {
+void ReferenceSearch::surface(int k, const V3& p, V3& ambient, V3& diffuse) const {
   const RefObject& o = s_.objects[k];
   const RefMaterial* m = &s_.materials[o.material];
   if (o.kind == RefObject::tiled) {
@@ -180,27 +180,44 @@ void ReferenceTracer::surface(int k, const V3& p, V3& ambient, V3& diffuse) cons
   }
 }
 
-V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_owner,
-                               const V3& origin, const V3& diffuse) {
+template <bool kRecord>
+V3 ReferenceTracer<kRecord>::illuminate(int j, int k, const V3& p, const V3& n, int base_owner,
+                                        const V3& origin, const V3& diffuse) {
   const RefLight& light = s_.lights[j];
   const V3 lv = sub(light.location, p);
   const double d = length(lv);
   const V3 l = unit(lv);
   const double cos = dot(n, l);
-  if (!(cos > 0)) return {};
+  RecordedLight* lr =
+      recording() ? &rec_->light(static_cast<int>(rec_->hits.size()) - 1, j) : nullptr;
+  if (lr) {
+    lr->distance = d;
+    lr->n_dot_l = cos;
+    lr->diffuse_distance = d;
+  }
+  if (!(cos > 0)) {
+    if (lr) lr->status = d > 0 ? RecordedLight::faces_away : RecordedLight::at_point;
+    return {};
+  }
   V3 e = light.emissivity;
+  auto missed = [&](RecordedLight::Status status) {
+    if (lr) lr->status = status;
+    return V3{};
+  };
   if (light.kind == LightKind::spot) {
-    if (!(dot(unit(sub(p, light.location)), light.direction) > light.cos_theta)) return {};
+    if (!(dot(unit(sub(p, light.location)), light.direction) > light.cos_theta))
+      return missed(RecordedLight::outside_cone);
   } else if (light.kind == LightKind::projector) {
     const V3 v = unit(sub(p, light.location));
     const double nd = dot(v, light.normal);
-    if (nd == 0) return {};
+    if (nd == 0) return missed(RecordedLight::off_slide);
     const double t = R((static_cast<X>(light.n_dot_point) - dot(light.normal, light.location)) / nd);
-    if (!(t > 0)) return {};
+    if (!(t > 0)) return missed(RecordedLight::off_slide);
     const V3 q = sub(along(light.location, v, t), light.point);
     const double qx = dot(light.frame.row0, q), qy = dot(light.frame.row1, q);
-    if (!(qx >= 0 && qx <= light.width && qy >= 0 && qy <= light.height)) return {};
-    if (!light.texture || light.texture->width == 0) return {};
+    if (!(qx >= 0 && qx <= light.width && qy >= 0 && qy <= light.height))
+      return missed(RecordedLight::off_slide);
+    if (!light.texture || light.texture->width == 0) return missed(RecordedLight::off_slide);
     e = filtered(e, texel(*light.texture, qx, qy, light.width, light.height));
   }
   // The shadow ray walks on through translucent objects, each filtering the light. (With
@@ -215,12 +232,14 @@ V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_
   // translucent surfaces could otherwise hand the ray back and forth without end.
   const int max_steps = 4 * static_cast<int>(s_.objects.size()) + 8;
   for (int step = 0; s_.shadows; ++step) {
-    if (step == max_steps) return {};
+    if (step == max_steps) return missed(RecordedLight::shadowed);
     double t;
     const int m = closest(from, l, skip, t);
     if (m < 0 || !(t < remaining)) break;
     const RefMaterial& mm = s_.materials[s_.objects[m].material];
-    if (mm.transparency == 0) return {};
+    if (lr && (mm.transparency == 0 || lr->blocker < 0)) lr->blocker = m;
+    if (mm.transparency == 0) return missed(RecordedLight::shadowed);
+    if (lr) lr->status = RecordedLight::filtered;
     e = mul(e, mm.filter);
     from = stored_[m];
     // COURSE §6: a translucent sphere that is the last object the search tested leaves the
@@ -233,6 +252,11 @@ V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_
   V3 c;
   for (int i = 0; i < 3; ++i)
     c[i] = R(static_cast<X>(diffuse[i]) * e[i] * cos / d_diffuse);
+  if (lr) {
+    lr->emissivity = {e.x, e.y, e.z};
+    lr->diffuse = {c.x, c.y, c.z};
+    lr->diffuse_distance = d_diffuse;
+  }
   const RefMaterial& mat = s_.materials[s_.objects[k].material];
   if (mat.shininess != 0) {
     // The glint looks from the ray's origin, which for a secondary ray is the point its
@@ -243,13 +267,28 @@ V3 ReferenceTracer::illuminate(int j, int k, const V3& p, const V3& n, int base_
     const double glint = std::pow(dot(n, h), mat.shininess);
     for (int i = 0; i < 3; ++i)
       c[i] = R(c[i] + static_cast<X>(R(static_cast<X>(e[i]) * mat.specular[i])) * glint);
+    if (lr) {
+      lr->highlight_base = dot(n, h);
+      for (int i = 0; i < 3; ++i) lr->specular[i] = R(static_cast<X>(c[i]) - lr->diffuse[i]);
+    }
   }
   return c;
 }
 
-V3 ReferenceTracer::trace(const V3& base, int base_owner, const V3& dir, double total, int last,
-                          int depth) {
-  if (total > s_.max_dist || rays_left_-- <= 0) return s_.background;
+template <bool kRecord>
+V3 ReferenceTracer<kRecord>::trace(const V3& base, int base_owner, const V3& dir, double total,
+                                   int last, int depth) {
+  const int rec = recording() ? record_ray(base, dir, total, depth) : -1;
+  if (total > s_.max_dist || rays_left_-- <= 0) {
+    if (recording()) rec_->hits[rec].capped = total > s_.max_dist;
+    return s_.background;
+  }
+  return shade(base, base_owner, dir, total, last, depth, rec);
+}
+
+template <bool kRecord>
+V3 ReferenceTracer<kRecord>::shade(const V3& base, int base_owner, const V3& dir, double total,
+                                   int last, int depth, int rec) {
   double t;
   const int k = closest(base, dir, last, t);
   if (k < 0) return s_.background;
@@ -264,13 +303,34 @@ V3 ReferenceTracer::trace(const V3& base, int base_owner, const V3& dir, double 
   if (secondary) watched_.push_back(k);
   V3 ambient, diffuse;
   surface(k, p, ambient, diffuse);
+  if (recording()) {
+    RecordedHit& h = rec_->hits[rec];
+    h.object = k;
+    h.t = t;
+    h.travelled = total;
+    h.point = {p.x, p.y, p.z};
+    h.normal = {n.x, n.y, n.z};
+    h.ambient = {ambient.x, ambient.y, ambient.z};
+    h.diffuse_colour = {diffuse.x, diffuse.y, diffuse.z};
+    h.specular = {m.specular.x, m.specular.y, m.specular.z};
+    h.shininess = m.shininess;
+  }
   V3 c = ambient;
   for (int j = 0; j < static_cast<int>(s_.lights.size()); ++j)
     c = add(c, illuminate(j, k, p, n, base_owner, base, diffuse));
   for (int i = 0; i < 3; ++i) c[i] = R(static_cast<X>(c[i]) / total);
+  if (recording()) rec_->hits[rec].local = rec_->hits[rec].value = {c.x, c.y, c.z};
   if (!secondary) return c;
   if (m.transparency != 0) {
     ++counts.reflection;
+    if (recording()) {
+      RecordedHit& h = rec_->hits[rec];
+      h.keep = R(1 - static_cast<X>(m.transparency));
+      h.filter = {m.filter.x, m.filter.y, m.filter.z};
+      h.transmitted = static_cast<int>(rec_->hits.size());
+      next_ray_ = RecordedHit::Ray::transmitted;
+      next_parent_ = rec;
+    }
     const V3 through = trace(p, k, dir, total, k, depth + 1);
     c = add(scale(c, R(1 - static_cast<X>(m.transparency))), mul(through, m.filter));
   }
@@ -280,17 +340,44 @@ V3 ReferenceTracer::trace(const V3& base, int base_owner, const V3& dir, double 
     const V3 from = stored_[k];
     const V3 nk = normal_at(k, from);
     const V3 r = sub(dir, scale(nk, R(2 * static_cast<X>(dot(nk, dir)))));
+    if (recording()) {
+      RecordedHit& h = rec_->hits[rec];
+      h.weight = {m.specular.x, m.specular.y, m.specular.z};
+      h.reflected = static_cast<int>(rec_->hits.size());
+      next_ray_ = RecordedHit::Ray::reflected;
+      next_parent_ = rec;
+    }
     c = add(c, mul(m.specular, trace(from, k, r, total, k, depth + 1)));
   }
   watched_.pop_back();
+  if (recording()) rec_->hits[rec].value = {c.x, c.y, c.z};
   return c;
 }
 
-V3 ReferenceTracer::primary(double wx, double wy) {
+template <bool kRecord>
+int ReferenceTracer<kRecord>::record_ray(const V3& base, const V3& dir, double total, int depth) {
+  const int rec = rec_->begin(next_ray_, next_parent_, depth);
+  RecordedHit& h = rec_->hits[rec];
+  h.origin = {base.x, base.y, base.z};
+  h.direction = {dir.x, dir.y, dir.z};
+  h.travelled = total;
+  h.value = h.local = {s_.background.x, s_.background.y, s_.background.z};
+  return rec;
+}
+
+template <bool kRecord>
+V3 ReferenceTracer<kRecord>::primary(double wx, double wy) {
   ++counts.primary;
   const V3 dir = unit(sub(V3{wx, wy, 0}, s_.eye));
   rays_left_ = kMaxRaysPerPixel;
+  if constexpr (kRecord) {
+    next_ray_ = RecordedHit::Ray::primary;
+    next_parent_ = -1;
+  }
   return trace(s_.eye, -1, dir, 0, -1, 0);
 }
+
+template class ReferenceTracer<false>;
+template class ReferenceTracer<true>;
 
 }  // namespace rayfarm::cpsc102
