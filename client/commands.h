@@ -10,6 +10,7 @@ namespace rayfarm::cli {
 using Runner = std::function<int()>;
 
 Runner add_render(CLI::App& app);
+Runner add_trace(CLI::App& app);
 Runner add_check(CLI::App& app);
 Runner add_convert(CLI::App& app);
 Runner add_compare(CLI::App& app);

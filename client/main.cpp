@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
     runners[sub] = make(*sub);
   };
   add("render", "render a scene to PNG or PPM", add_render);
+  add("trace", "follow one pixel through the renderer: every term of its colour", add_trace);
   add("check", "validate and lint scenes; exit 1 on errors", add_check);
   add("convert", "convert a scene to JSON, model file or POV-Ray SDL", add_convert);
   add("compare", "compare two images (RMSE, PSNR, differing pixels)", add_compare);

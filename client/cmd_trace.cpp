@@ -1,0 +1,55 @@
+// `rayfarm trace SCENE X Y [--json] [options]`: follows one pixel through the renderer and
+// prints every term of its colour, down to the bytes the render writes.
+#include <iostream>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "rayfarm/explain.h"
+
+namespace rayfarm::cli {
+namespace {
+
+struct TraceArgs {
+  std::string scene;
+  int x = 0;
+  int y = 0;
+  bool json = false;
+  OptionFlags flags;
+};
+
+}  // namespace
+
+Runner add_trace(CLI::App& app) {
+  auto args = std::make_shared<TraceArgs>();
+  app.add_option("scene", args->scene, "scene file (model or JSON; - for stdin)")->required();
+  app.add_option("x", args->x, "pixel column, 0 at the left")->required();
+  app.add_option("y", args->y, "pixel row, 0 at the top")->required();
+  app.add_flag("--json", args->json, "print the explanation as JSON");
+  args->flags.add_to(app);
+  return [args]() -> int {
+    auto text = read_input(args->scene);
+    if (!text) return kInputError;
+    auto loaded = load_checked(args->scene, *text, false);
+    if (!loaded) return kInputError;
+    auto options = resolve_options(*loaded->scene, args->flags);
+    if (!options) return kInputError;
+    std::string error;
+    const auto explainer = Explainer::create(*loaded->scene, *options, &error);
+    if (!explainer) {
+      std::cerr << "rayfarm: error: " << error << "\n";
+      return kInputError;
+    }
+    const auto explanation = explainer->explain(args->x, args->y, &error);
+    if (!explanation) {  // the only refusal left: a pixel outside the image
+      std::cerr << "rayfarm: error: " << error << "\n";
+      return kUsage;
+    }
+    if (args->json)
+      std::cout << explanation_json(*explanation).dump(2) << "\n";
+    else
+      std::cout << explanation_text(*explanation);
+    return kOk;
+  };
+}
+
+}  // namespace rayfarm::cli
