@@ -15,6 +15,8 @@ namespace rayfarm::cli {
 
 // SPEC §6.
 enum Exit { kOk = 0, kInputError = 1, kUsage = 2, kServerError = 3 };
+// `compare` exits as diff does: 1 for images that differ, 2 for trouble.
+constexpr int kDiffer = 1;
 
 // Reads a file, or standard input for "-". nullopt with a message on stderr on failure.
 std::optional<std::string> read_input(const std::string& path);

@@ -1,4 +1,6 @@
-// `rayfarm compare A B`: the grader's metrics, locally (the same as POST /compare).
+// `rayfarm compare A B`: the grader's metrics, locally (the same as POST /compare). Exits as
+// diff does: 0 when the images match within the threshold, 1 when they differ (a different
+// size too), 2 when an image cannot be read.
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -16,6 +18,7 @@ struct CompareArgs {
   std::string a, b, diff;
   int threshold = 0;
   int neighborhood = 0;
+  double max_bad_fraction = 0;
   bool json = false;
 };
 }  // namespace
@@ -30,33 +33,41 @@ Runner add_compare(CLI::App& app) {
   app.add_option("--neighborhood", args->neighborhood,
                  "1: a pixel matches if any pixel of its 3x3 neighbourhood does")
       ->check(CLI::Range(0, 1));
+  app.add_option("--max-bad-fraction", args->max_bad_fraction,
+                 "the images match with at most this fraction of differing pixels")
+      ->check(CLI::Range(0.0, 1.0));
   app.add_flag("--json", args->json, "print the metrics as JSON");
   return [args]() -> int {
     std::optional<Image> images[2];
     const std::string* names[2] = {&args->a, &args->b};
     for (int i = 0; i < 2; ++i) {
       auto bytes = read_input(*names[i]);
-      if (!bytes) return kInputError;
+      if (!bytes) return kUsage;
       std::string error;
       images[i] = decode_image(*bytes, &error);
       if (!images[i]) {
         std::cerr << "rayfarm: " << *names[i] << ": " << error << "\n";
-        return kInputError;
+        return kUsage;
       }
     }
     CompareOptions options{args->threshold, args->neighborhood == 1};
     std::string error;
     auto r = compare_images(*images[0], *images[1], options, &error);
     if (!r) {
+      if (args->json)
+        std::cout << nlohmann::json{{"match", false}, {"error", error}}.dump(2) << "\n";
       std::cerr << "rayfarm: " << error << "\n";
-      return kInputError;
+      return kDiffer;
     }
+    const bool match = r->differing_fraction <= args->max_bad_fraction;
     if (!args->diff.empty()) {
       auto png = encode_image(diff_image(*images[0], *images[1], options), ImageFormat::png);
-      if (!write_output(args->diff, png.data(), png.size())) return kInputError;
+      if (!write_output(args->diff, png.data(), png.size())) return kUsage;
     }
     if (args->json) {
       nlohmann::json j = compare_json(*r, options);
+      j["match"] = match;
+      j["max_bad_fraction"] = args->max_bad_fraction;
       std::cout << j.dump(2) << "\n";
     } else {
       std::printf("size              %dx%d\n", r->width, r->height);
@@ -71,8 +82,9 @@ Runner add_compare(CLI::App& app) {
       std::printf("off_by_more_than_1 %lld\n", r->off_by_more_than_1);
       std::printf("differing_channels %lld of %lld\n", r->differing_channels,
                   3LL * r->width * r->height);
+      std::printf("match             %s\n", match ? "yes" : "no");
     }
-    return kOk;
+    return match ? kOk : kDiffer;
   };
 }
 

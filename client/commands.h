@@ -14,6 +14,7 @@ Runner add_trace(CLI::App& app);
 Runner add_check(CLI::App& app);
 Runner add_convert(CLI::App& app);
 Runner add_compare(CLI::App& app);
+Runner add_grade(CLI::App& app);
 Runner add_report(CLI::App& app);
 Runner add_status(CLI::App& app);
 Runner add_cancel(CLI::App& app);

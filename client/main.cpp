@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   add("check", "validate and lint scenes; exit 1 on errors", add_check);
   add("convert", "convert a scene to JSON, model file or POV-Ray SDL", add_convert);
   add("compare", "compare two images (RMSE, PSNR, differing pixels)", add_compare);
+  add("grade", "grade a student's images against an assignment's references", add_grade);
   add("report", "error against run time over a sweep of settings", add_report);
   add("status", "show a job's status on a server", add_status);
   add("cancel", "cancel a job on a server", add_cancel);

@@ -189,6 +189,7 @@ void HttpApi::routes() {
   server_.Get(R"(/jobs/([0-9a-f]{32})/events)", to(get_job_events));
   server_.Get("/jobs", to(get_jobs));
   server_.Post("/compare", to(post_compare));
+  server_.Post("/grade", to(post_grade));
   server_.Get("/samples", to(get_samples));
   server_.Get("/healthz", to(get_healthz));
   server_.Get("/metrics", to(get_metrics));

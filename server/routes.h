@@ -4,6 +4,11 @@
 
 #include <httplib.h>
 
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+
 #include "service.h"
 
 namespace rayfarm::server {
@@ -22,6 +27,16 @@ void get_jobs(Service& svc, const httplib::Request& req, httplib::Response& res)
 
 // routes_compare.cpp
 void post_compare(Service& svc, const httplib::Request& req, httplib::Response& res);
+// Submits a render and waits for its image (the caller holds a waiting slot).
+std::optional<Image> render_and_wait(Service& svc, const std::string& scene, const Params& params,
+                                     const std::string& client, const TextureFiles& textures,
+                                     ApiError& error, std::string* job_id);
+// The query parameters, and the multipart fields (parts without a file name) named in `names`.
+std::map<std::string, std::string> request_fields(const httplib::Request& req,
+                                                  const std::set<std::string>& names);
+
+// routes_grade.cpp
+void post_grade(Service& svc, const httplib::Request& req, httplib::Response& res);
 
 // routes_info.cpp
 void get_samples(Service& svc, const httplib::Request& req, httplib::Response& res);

@@ -1,10 +1,11 @@
 // POST /compare: two uploaded images, or a scene (with its textures) rendered here against an
-// uploaded image, compared pixel by pixel; the numbers as JSON or, with ?diff=1, the difference
-// image.
+// uploaded image, compared pixel by pixel; the numbers as JSON or, with diff=1, the difference
+// image. Its options come from the query or from form fields, and unknown ones are refused.
 #include <chrono>
 #include <cmath>
 #include <mutex>
 #include <optional>
+#include <set>
 
 #include "http_util.h"
 #include "rayfarm/compare.h"
@@ -17,62 +18,137 @@ using httplib::Request;
 using httplib::Response;
 using Json = nlohmann::json;
 
+namespace {
+
+const std::set<std::string> kCompareOptions = {"threshold", "neighborhood", "diff",
+                                               "max_bad_fraction"};
+
+bool truthy(const std::string& v) { return v == "1" || v == "true" || v == "yes"; }
+
+}  // namespace
+
+std::optional<Image> render_and_wait(Service& svc, const std::string& scene, const Params& params,
+                                     const std::string& client, const TextureFiles& textures,
+                                     ApiError& error, std::string* job_id) {
+  Submitted sub = svc.submit(scene, params, client, textures);
+  if (sub.error) {
+    error = sub.error;
+    return std::nullopt;
+  }
+  Job& job = *sub.job;
+  if (job_id) *job_id = job.id;
+  std::unique_lock lock(job.mu);
+  while (!is_final(job.state) && !svc.stopped())
+    job.changed.wait_for(lock, std::chrono::milliseconds(500));
+  const bool done = job.state == JobState::done;
+  const std::string message = job.error;
+  lock.unlock();
+  if (!done) {
+    error = api_error(500, "render_failed",
+                      "the reference render did not finish" + (message.empty() ? "" : ": " + message));
+    return std::nullopt;
+  }
+  std::optional<Image> image = svc.current_image(job);
+  if (!image) error = api_error(410, "expired", "the reference image expired");
+  return image;
+}
+
+std::map<std::string, std::string> request_fields(const Request& req,
+                                                  const std::set<std::string>& names) {
+  std::map<std::string, std::string> out;
+  for (const auto& [k, v] : req.params) out[k] = v;
+  for (const auto& [name, part] : req.files)
+    if (part.filename.empty() && names.count(name)) out[name] = part.content;
+  return out;
+}
+
 void post_compare(Service& svc, const Request& req, Response& res) {
   if (!req.is_multipart_form_data())
     return send_error(res, 400, "bad_request",
                       "send multipart form data with parts 'a' and 'b', or 'scene' and 'image'");
+  const bool with_scene = req.has_file("scene") && req.has_file("image");
+  // Form fields that name an option are options; with a scene, other parts are its textures.
+  std::set<std::string> known = kCompareOptions;
+  for (const OptionSpec& spec : option_specs()) known.insert(std::string(spec.name));
+  const std::map<std::string, std::string> fields = request_fields(req, known);
   CompareOptions options;
-  if (req.has_param("threshold")) {
-    try {
-      size_t used = 0;
-      int t = std::stoi(req.get_param_value("threshold"), &used);
-      if (used != req.get_param_value("threshold").size() || t < 0 || t > 255) throw 0;
-      options.threshold = t;
-    } catch (...) {
-      return send_error(res, 400, "invalid_option", "threshold must be an integer in 0..255");
+  double max_bad_fraction = 0;
+  bool diff = false;
+  Params render_params;
+  for (const auto& [k, v] : fields) {
+    if (k == "threshold") {
+      try {
+        size_t used = 0;
+        int t = std::stoi(v, &used);
+        if (used != v.size() || t < 0 || t > 255) throw 0;
+        options.threshold = t;
+      } catch (...) {
+        return send_error(res, 400, "invalid_option", "threshold must be an integer in 0..255");
+      }
+    } else if (k == "neighborhood") {
+      options.neighborhood = truthy(v);
+    } else if (k == "diff") {
+      diff = truthy(v);
+    } else if (k == "max_bad_fraction") {
+      try {
+        size_t used = 0;
+        max_bad_fraction = std::stod(v, &used);
+        if (used != v.size() || !(max_bad_fraction >= 0 && max_bad_fraction <= 1)) throw 0;
+      } catch (...) {
+        return send_error(res, 400, "invalid_option", "max_bad_fraction must be a number in 0..1");
+      }
+    } else if (with_scene && find_option(k)) {
+      render_params.emplace_back(k, v);
+    } else {
+      ApiError e = api_error(400, "invalid_option",
+                             "unknown option '" + k.substr(0, 64) +
+                                 "': /compare takes threshold, neighborhood, max_bad_fraction and "
+                                 "diff" + (with_scene ? ", and render options" : "; render options "
+                                                                                  "need a scene"));
+      e.path = k.substr(0, 64);
+      return send_error(res, e);
     }
   }
-  options.neighborhood = param_true(req, "neighborhood");
   std::string error;
   std::optional<Image> a, b;
   std::string job_id;
   if (req.has_file("a") && req.has_file("b")) {
+    for (const auto& [name, part] : req.files)
+      if (name != "a" && name != "b" && !(part.filename.empty() && known.count(name)))
+        return send_error(res, 400, "bad_request",
+                          "unexpected part '" + name.substr(0, 64) + "' beside 'a' and 'b'");
     a = decode_image(req.get_file_value("a").content, &error);
     if (!a) return send_error(res, 400, "invalid_image", "part 'a': " + error);
     b = decode_image(req.get_file_value("b").content, &error);
     if (!b) return send_error(res, 400, "invalid_image", "part 'b': " + error);
-  } else if (req.has_file("scene") && req.has_file("image")) {
+  } else if (with_scene) {
     b = decode_image(req.get_file_value("image").content, &error);
     if (!b) return send_error(res, 400, "invalid_image", "part 'image': " + error);
-    Params params;
-    for (auto& [k, v] : req.params)
-      if (k != "threshold" && k != "neighborhood" && k != "diff") params.emplace_back(k, v);
     TextureFiles textures;
     if (ApiError e = texture_parts(req, {"scene", "image"}, textures)) return send_error(res, e);
-    Submitted sub =
-        svc.submit(req.get_file_value("scene").content, params, client_of(req), textures);
-    if (sub.error) return send_error(res, sub.error);
-    Job& job = *sub.job;
-    job_id = job.id;
-    std::unique_lock lock(job.mu);
-    while (!is_final(job.state) && !svc.stopped())
-      job.changed.wait_for(lock, std::chrono::milliseconds(500));
-    bool done = job.state == JobState::done;
-    std::string message = job.error;
-    lock.unlock();
-    if (!done)
-      return send_error(res, 500, "render_failed",
-                        "the reference render did not finish" + (message.empty() ? "" : ": " + message));
-    a = svc.current_image(job);
-    if (!a) return send_error(res, 410, "expired", "the reference image expired");
+    for (const auto& [name, part] : req.files)
+      if (part.filename.empty() && known.count(name)) textures.erase(name);
+    // The render is waited for here: it takes one of the waiting slots, as ?wait=1 does.
+    if (!svc.acquire_waiter()) {
+      ApiError e = api_error(503, "busy", "too many requests are waiting for renders; try again");
+      e.retry_after = 2;
+      return send_error(res, e);
+    }
+    ApiError render_error;
+    a = render_and_wait(svc, req.get_file_value("scene").content, render_params, client_of(req),
+                        textures, render_error, &job_id);
+    svc.release_waiter();
+    if (!a) return send_error(res, render_error);
   } else {
     return send_error(res, 400, "bad_request",
                       "send parts 'a' and 'b' (two images), or 'scene' and 'image'");
   }
   auto result = compare_images(*a, *b, options, &error);
   if (!result) return send_error(res, 422, "size_mismatch", error);
-  if (param_true(req, "diff")) return send_image(res, diff_image(*a, *b, options), false);
+  if (diff) return send_image(res, diff_image(*a, *b, options), false);
   Json body = compare_json(*result, options);
+  body["max_bad_fraction"] = max_bad_fraction;
+  body["match"] = result->differing_fraction <= max_bad_fraction;
   if (!job_id.empty()) body["reference_job"] = job_id;
   send_json(res, 200, body);
 }

@@ -56,6 +56,8 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   add("--result-ttl", s.result_ttl, "seconds a finished job is kept")->check(CLI::Range(1.0, 1e9));
   add("--results-max-bytes", s.results_max_bytes, "bytes of images kept in --results-dir");
   add("--samples-dir", s.samples_dir, "directory of bundled sample scenes");
+  add("--assignments-dir", s.assignments_dir,
+      "directory of assignments POST /grade may name (NAME.json, scenes beside it)");
   add("--shutdown-grace", s.shutdown_grace, "seconds running renders may finish on SIGTERM")
       ->check(CLI::Range(0.0, 3600.0));
   add("--header-timeout", s.header_timeout, "seconds a client has to send a request's head")

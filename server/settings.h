@@ -38,6 +38,7 @@ struct Settings {
   double result_ttl = 24 * 3600;  // seconds a finished job is kept
   std::uint64_t results_max_bytes = 2ULL << 30;
   std::string samples_dir;
+  std::string assignments_dir;  // assignments POST /grade may name
   double shutdown_grace = 10;  // seconds running renders may finish after SIGTERM
   double header_timeout = 10;  // seconds a client has to send a request line and headers
   bool access_log = true;

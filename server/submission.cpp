@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <random>
 
+#include "rayfarm/content_key.h"
 #include "rayfarm/load.h"
 #include "rayfarm/sha256.h"
 #include "rayfarm/writers.h"
@@ -21,20 +22,6 @@ std::string random_id() {
   return id;
 }
 
-namespace {
-
-// The cache key: the scene as parsed (so layout and comments do not matter, and a model file
-// and its JSON twin share results), the hash of each texture file it names, and every option
-// that changes pixels (not the format: the cache holds PNGs and converts).
-std::string content_key(const SceneDesc& desc, const RenderOptions& options,
-                        const std::vector<std::string>& textures) {
-  std::string text = "render-version " + std::to_string(kRenderVersion) + "\n" + write_json(desc) +
-                     "\n" + canonical_string(options);
-  for (const std::string& t : textures) text += "\ntexture " + t;
-  return sha256_hex(text).substr(0, 40);
-}
-
-}  // namespace
 
 std::shared_ptr<Job> Service::new_job(const std::string& client) {
   auto job = std::make_shared<Job>();

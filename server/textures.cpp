@@ -24,17 +24,6 @@ std::optional<std::string> UploadedTextures::read(const std::string& path,
   return std::nullopt;
 }
 
-std::vector<std::string> texture_hashes(const Scene& scene, const TextureFiles& files) {
-  std::map<std::string_view, std::string> by_path;
-  std::vector<std::string> out;
-  for (const Texture& t : scene.textures) {
-    auto [it, added] = by_path.try_emplace(t.path);
-    if (added) it->second = sha256_hex(files.at(t.path));
-    out.push_back(it->second);
-  }
-  return out;
-}
-
 ApiError Service::check_uploads(const TextureFiles& files) const {
   const Settings& s = settings_;
   if (files.size() > static_cast<size_t>(s.max_textures))

@@ -24,8 +24,4 @@ class UploadedTextures final : public ResourceResolver {
   const TextureFiles& files_;
 };
 
-// SHA-256 of each texture's bytes, in the order of `scene.textures`: part of the cache key,
-// and the names the results directory keeps them under. Every path must be in `files`.
-std::vector<std::string> texture_hashes(const Scene& scene, const TextureFiles& files);
-
 }  // namespace rayfarm::server

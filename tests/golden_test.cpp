@@ -22,7 +22,9 @@ std::vector<fs::path> bundled_scenes() {
   std::vector<fs::path> out;
   for (auto& entry : fs::recursive_directory_iterator(fs::path(RAYFARM_SOURCE_DIR) / "scenes")) {
     auto ext = entry.path().extension();
-    if (ext == ".txt" || ext == ".json") out.push_back(entry.path());
+    // scenes/assignments/ also holds assignment files (JSON, not scenes).
+    const bool assignment = ext == ".json" && entry.path().string().find("/assignments/") != std::string::npos;
+    if ((ext == ".txt" || ext == ".json") && !assignment) out.push_back(entry.path());
   }
   std::sort(out.begin(), out.end());
   return out;

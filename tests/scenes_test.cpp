@@ -14,7 +14,9 @@ std::vector<std::filesystem::path> scene_files() {
   std::vector<std::filesystem::path> out;
   for (auto& entry : std::filesystem::recursive_directory_iterator(RAYFARM_SOURCE_DIR "/scenes")) {
     auto ext = entry.path().extension();
-    if (ext == ".txt" || ext == ".json") out.push_back(entry.path());
+    // scenes/assignments/ also holds assignment files (JSON, not scenes).
+    const bool assignment = ext == ".json" && entry.path().string().find("/assignments/") != std::string::npos;
+    if ((ext == ".txt" || ext == ".json") && !assignment) out.push_back(entry.path());
   }
   std::sort(out.begin(), out.end());
   return out;

@@ -1250,6 +1250,110 @@ TEST(ServerCompare, DifferentSizesAre422) {
   EXPECT_EQ(none->status, 400);
 }
 
+TEST(ServerCompare, OptionsComeFromFormFieldsAndUnknownOnesAreRefused) {
+  TestServer server;
+  auto c = server.client();
+  Image a = gradient(12, 8), b = a;
+  b.rgb[0] = static_cast<std::uint8_t>(b.rgb[0] + 3);
+  httplib::MultipartFormDataItems items = {{"a", png_bytes(a), "a.png", "image/png"},
+                                           {"b", png_bytes(b), "b.png", "image/png"},
+                                           {"threshold", "3", "", ""}};
+  Json j = json_of(c->Post("/compare", items));
+  EXPECT_EQ(j["threshold"], 3);
+  EXPECT_EQ(j["differing_pixels"], 0);
+  EXPECT_EQ(j["match"], true);
+  // A misspelt option is an error, not a silently exact comparison.
+  auto typo = c->Post("/compare?treshold=3", items);
+  ASSERT_TRUE(typo);
+  EXPECT_EQ(typo->status, 400);
+  EXPECT_EQ(error_of(typo)["code"], "invalid_option");
+  // Render options need a scene.
+  auto render_option = c->Post("/compare?spp=4", items);
+  ASSERT_TRUE(render_option);
+  EXPECT_EQ(render_option->status, 400);
+  // Identical images: PSNR null (JSON has no infinity).
+  httplib::MultipartFormDataItems same = {{"a", png_bytes(a), "a.png", "image/png"},
+                                          {"b", png_bytes(a), "b.png", "image/png"}};
+  Json ident = json_of(c->Post("/compare", same));
+  EXPECT_TRUE(ident["psnr"].is_null());
+  EXPECT_EQ(ident["identical"], true);
+}
+
+// ---- POST /grade -------------------------------------------------------------------------
+
+constexpr const char* kAssignment = R"({"name": "Lab", "profile": "cpsc102", "tests": [
+  {"name": "spheres", "scene": "scenes/spheres.txt", "image": "spheres.png", "points": 2},
+  {"name": "mirror", "scene": "scenes/mirror.txt", "image": "mirror.png", "points": 3}]})";
+
+std::string lab_file(const std::string& path) {
+  std::ifstream in(std::string(RAYFARM_SOURCE_DIR "/scenes/assignments/lab1/") + path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(ServerGrade, AnUploadedAssignmentIsGradedInThePlatformsFormat) {
+  TestServer server;
+  auto c = server.client();
+  httplib::MultipartFormDataItems items = {
+      {"assignment", kAssignment, "lab.json", "application/json"},
+      {"scenes/spheres.txt", lab_file("scenes/spheres.txt"), "spheres.txt", "text/plain"},
+      {"scenes/mirror.txt", lab_file("scenes/mirror.txt"), "mirror.txt", "text/plain"},
+      {"spheres.png", lab_file("students/ada/spheres.png"), "spheres.png", "image/png"},
+      {"mirror.png", lab_file("students/ben/mirror.png"), "mirror.png", "image/png"}};
+  auto r = c->Post("/grade?format=gradescope", items);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  Json j = Json::parse(r->body);
+  EXPECT_EQ(j["score"], 2);
+  EXPECT_EQ(j["tests"][0]["status"], "passed");
+  EXPECT_EQ(j["tests"][1]["extra_data"]["hints"][0]["code"], "rounding");
+  // The same from a form field, in JUnit.
+  items.push_back({"format", "junit", "", ""});
+  auto x = c->Post("/grade", items);
+  ASSERT_TRUE(x);
+  EXPECT_EQ(x->get_header_value("Content-Type"), "application/xml");
+  EXPECT_NE(x->body.find("failures=\"1\""), std::string::npos);
+}
+
+TEST(ServerGrade, AStoredAssignmentIsNamedAndItsFolderIsAFence) {
+  Settings s = test_settings();
+  s.assignments_dir = RAYFARM_SOURCE_DIR "/scenes/assignments/lab1";
+  TestServer server(s);
+  auto c = server.client();
+  httplib::MultipartFormDataItems images;
+  for (const char* name : {"spheres", "shadows", "mirror", "glint"})
+    images.push_back({std::string(name) + ".png", lab_file(std::string("students/ada/") + name + ".png"),
+                      "x.png", "image/png"});
+  auto r = c->Post("/grade?assignment=lab1", images);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(Json::parse(r->body)["score"], 10);
+  for (const char* name : {"../lab1/lab1", "/etc/passwd", "nothing"}) {
+    auto bad = c->Post(std::string("/grade?assignment=") + name, images);
+    ASSERT_TRUE(bad);
+    EXPECT_EQ(bad->status, 404) << name;
+  }
+}
+
+TEST(ServerGrade, AssignmentErrorsAre400WithTheirPath) {
+  TestServer server;
+  auto c = server.client();
+  httplib::MultipartFormDataItems items = {
+      {"assignment", R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "points": -1}]})",
+       "a.json", "application/json"}};
+  auto r = c->Post("/grade", items);
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  EXPECT_EQ(error_of(r)["code"], "invalid_assignment");
+  EXPECT_EQ(error_of(r)["path"], "/tests/0/points");
+  // A scene the upload does not carry fails its test, not the request.
+  items = {{"assignment", R"({"name": "x", "tests": [{"name": "a", "scene": "../../etc/passwd"}]})",
+            "a.json", "application/json"}};
+  Json j = Json::parse(c->Post("/grade", items)->body);
+  EXPECT_EQ(j["tests"][0]["status"], "error");
+  auto unknown = c->Post("/grade?spp=2", items);
+  EXPECT_EQ(unknown->status, 400);
+}
+
 TEST(ServerCompare, DiffAnswersAPng) {
   TestServer server;
   auto c = server.client();

@@ -54,6 +54,9 @@ std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
 std::string format_diagnostics(const Diagnostics& ds, std::string_view file_name,
                                std::string_view source);
 
+// The line and column (1-based) of a byte offset into a text; a byte-order mark takes no column.
+Where position_of_offset(std::string_view text, size_t offset);
+
 // The candidate closest to `word` by edit distance, or empty when none is close enough
 // to be a plausible typo.
 std::string nearest_word(std::string_view word, std::span<const std::string_view> candidates);

@@ -152,6 +152,20 @@ size_t edit_distance(std::string_view a, std::string_view b) {
 
 }  // namespace
 
+Where position_of_offset(std::string_view text, size_t offset) {
+  Where w{1, 1, {}};
+  size_t start = text.starts_with("\xEF\xBB\xBF") ? 3 : 0;  // a byte-order mark takes no column
+  for (size_t i = start; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++w.line;
+      w.column = 1;
+    } else {
+      ++w.column;
+    }
+  }
+  return w;
+}
+
 std::string nearest_word(std::string_view word, std::span<const std::string_view> candidates) {
   if (word.size() > 64) return {};
   std::string lower(word);

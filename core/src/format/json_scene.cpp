@@ -415,20 +415,6 @@ class JsonSceneReader {
   Diagnostics& diags_;
 };
 
-Where position_of_offset(std::string_view text, size_t offset) {
-  Where w{1, 1, {}};
-  size_t start = text.starts_with("\xEF\xBB\xBF") ? 3 : 0;  // a byte-order mark takes no column
-  for (size_t i = start; i < offset && i < text.size(); ++i) {
-    if (text[i] == '\n') {
-      ++w.line;
-      w.column = 1;
-    } else {
-      ++w.column;
-    }
-  }
-  return w;
-}
-
 }  // namespace
 
 SceneDesc parse_json_scene(std::string_view text, Diagnostics& diags) {

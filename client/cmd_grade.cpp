@@ -1,0 +1,420 @@
+// `rayfarm grade ASSIGNMENT (--images DIR | --run 'CMD {scene} {out}')`: renders each test's
+// reference here (cached by content key), compares the student's image, and writes the
+// platform's result file. Exit 0 whenever grading ran: the platforms read the file.
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+
+#include "cli_common.h"
+#include "commands.h"
+#include "rayfarm/grade.h"
+#include "rayfarm/image_io.h"
+#include "rayfarm/render.h"
+
+namespace rayfarm::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace rayfarm::grading;
+
+struct GradeArgs {
+  std::string assignment;
+  std::string images;
+  std::string run;
+  std::string format = "md";
+  std::string out = "-";
+  std::string lock;
+  std::string cache;
+  bool no_cache = false;
+  bool freeze = false;
+  bool no_hints = false;
+  double timeout = 60;
+  double memory_mb = 2048;
+  double fail_under = -1;
+  int threads = 0;
+};
+
+constexpr size_t kLogTail = 2048;
+constexpr rlim_t kMaxOutputBytes = 512ull << 20;
+
+std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+std::string replace_all(std::string s, const std::string& from, const std::string& to) {
+  for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+    s.replace(at, from.size(), to);
+  return s;
+}
+
+fs::path default_cache() {
+  if (const char* c = std::getenv("RAYFARM_CACHE"); c && *c) return c;
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return fs::path(x) / "rayfarm/references";
+  if (const char* h = std::getenv("HOME"); h && *h) return fs::path(h) / ".cache/rayfarm/references";
+  return {};
+}
+
+// The result of running a student's program on one scene.
+struct RunOutcome {
+  bool started = false;
+  bool timed_out = false;
+  int status = 0;  // wait status
+  std::string output;  // standard output (the image, when the command has no {out})
+  std::string log;     // standard error, and standard output when it is not the image
+  double seconds = 0;
+};
+
+// Runs `command` with /bin/sh in its own process group, under a CPU, memory and file-size
+// limit, killing the whole group at the wall-clock limit. This is a resource fence, not a
+// sandbox: the program runs as this user, sees this file system and network.
+RunOutcome run_limited(const std::string& command, bool stdout_is_image, double timeout,
+                       double memory_mb) {
+  RunOutcome r;
+  int out_pipe[2], err_pipe[2];
+  if (pipe(out_pipe) != 0 || pipe(err_pipe) != 0) return r;
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t pid = fork();
+  if (pid < 0) return r;
+  if (pid == 0) {
+    setpgid(0, 0);
+    rlimit mem{static_cast<rlim_t>(memory_mb * 1024 * 1024), static_cast<rlim_t>(memory_mb * 1024 * 1024)};
+    setrlimit(RLIMIT_AS, &mem);
+    rlimit cpu{static_cast<rlim_t>(timeout) + 1, static_cast<rlim_t>(timeout) + 2};
+    setrlimit(RLIMIT_CPU, &cpu);
+    rlimit fsize{kMaxOutputBytes, kMaxOutputBytes};
+    setrlimit(RLIMIT_FSIZE, &fsize);
+    rlimit core{0, 0};
+    setrlimit(RLIMIT_CORE, &core);
+    int devnull = open("/dev/null", O_RDONLY);
+    dup2(devnull, 0);
+    dup2(out_pipe[1], 1);
+    dup2(err_pipe[1], 2);
+    close(out_pipe[0]);
+    close(err_pipe[0]);
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  setpgid(pid, pid);
+  r.started = true;
+  close(out_pipe[1]);
+  close(err_pipe[1]);
+  pollfd fds[2] = {{out_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
+  std::string* sinks[2] = {stdout_is_image ? &r.output : &r.log, &r.log};
+  int open_fds = 2;
+  char buf[65536];
+  while (open_fds > 0) {
+    const double left =
+        timeout - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (left <= 0) {
+      r.timed_out = true;
+      break;
+    }
+    if (poll(fds, 2, static_cast<int>(std::min(left, 1.0) * 1000) + 1) < 0 && errno != EINTR) break;
+    for (int i = 0; i < 2; ++i) {
+      if (fds[i].fd < 0 || !(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+      const ssize_t n = read(fds[i].fd, buf, sizeof buf);
+      if (n <= 0) {
+        close(fds[i].fd);
+        fds[i].fd = -1;
+        --open_fds;
+        continue;
+      }
+      std::string& sink = *sinks[i];
+      if (sink.size() < kMaxOutputBytes) sink.append(buf, static_cast<size_t>(n));
+      // Only the log's end is shown: keep it from growing without bound.
+      if (&sink == &r.log && r.log.size() > 4 * kLogTail) r.log.erase(0, r.log.size() - kLogTail);
+    }
+  }
+  // The whole group goes, including anything the program left running.
+  kill(-pid, SIGKILL);
+  for (pollfd& f : fds)
+    if (f.fd >= 0) close(f.fd);
+  waitpid(pid, &r.status, 0);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+class LocalBackend final : public Backend {
+ public:
+  LocalBackend(const GradeArgs& args, fs::path base) : args_(args), base_(std::move(base)) {
+    if (!args.no_cache) cache_ = args.cache.empty() ? default_cache() : fs::path(args.cache);
+  }
+
+  std::optional<SceneFiles> scene(const std::string& path, std::string* error) override {
+    if (auto it = scenes_.find(path); it != scenes_.end()) return it->second;
+    const fs::path file = base_ / path;
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) {
+      *error = "scene '" + path + "' was not found beside the assignment (" + file.string() + ")";
+      return std::nullopt;
+    }
+    auto text = read_input(file.string());
+    if (!text) {
+      *error = "cannot read scene '" + file.string() + "'";
+      return std::nullopt;
+    }
+    const FileResolver files = FileResolver::beside(file.string());
+    const RecordingResolver recording(files);
+    auto loaded = std::make_shared<LoadedScene>(load_scene(*text, LoadDetail::full, &recording));
+    if (loaded->diags.has_errors() || !loaded->scene) {
+      *error = format_diagnostics(loaded->diags, file.string(), *text);
+      while (!error->empty() && error->back() == '\n') error->pop_back();
+      return std::nullopt;
+    }
+    SceneFiles s{path, *text, recording.files(), loaded};
+    scenes_.emplace(path, s);
+    return s;
+  }
+
+  std::optional<Image> render(const SceneFiles& scene, const RenderOptions& options,
+                              std::string* error) override {
+    const std::string key = reference_key(scene, options);
+    const fs::path cached = cache_.empty() ? fs::path() : cache_ / (key + ".png");
+    std::error_code ec;
+    if (!cached.empty() && fs::is_regular_file(cached, ec))
+      if (auto bytes = read_input(cached.string()))
+        if (auto image = decode_image(*bytes, error)) return image;
+    RenderStats stats;
+    Image image = render_image(*scene.loaded->scene, options, args_.threads, &stats, {}, nullptr, error);
+    if (image.width == 0) return std::nullopt;
+    if (!cached.empty()) {
+      fs::create_directories(cache_, ec);
+      const auto png = encode_png(image);
+      // A cache that cannot be written is no cache, not an error.
+      const fs::path tmp = cached.string() + ".tmp" + std::to_string(getpid());
+      if (FILE* f = std::fopen(tmp.c_str(), "wb")) {
+        const bool ok = std::fwrite(png.data(), 1, png.size(), f) == png.size();
+        if (std::fclose(f) == 0 && ok) fs::rename(tmp, cached, ec);
+        else fs::remove(tmp, ec);
+      }
+    }
+    return image;
+  }
+
+  StudentImage student(const TestSpec& test, const SceneFiles* scene) override {
+    if (!args_.run.empty()) return run(test, scene);
+    StudentImage s;
+    if (args_.images.empty()) {
+      s.error = "no student images were given";
+      return s;
+    }
+    fs::path file = fs::path(args_.images) / test.image;
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec)) {
+      // The other of the two formats under the same name is graded, with a note.
+      for (const char* ext : {".ppm", ".png", ".PPM", ".PNG"}) {
+        fs::path other = file;
+        other.replace_extension(ext);
+        if (other != file && fs::is_regular_file(other, ec)) {
+          s.note = "graded " + other.filename().string() + ": no " + test.image + " was found";
+          file = other;
+          break;
+        }
+      }
+    }
+    if (!fs::is_regular_file(file, ec)) {
+      s.error = "your image " + test.image + " was not found";
+      return s;
+    }
+    auto bytes = read_input(file.string());
+    std::string error;
+    if (bytes) s.image = decode_image(*bytes, &error);
+    if (!s.image) s.error = "your image " + file.filename().string() + " cannot be read: " + error;
+    return s;
+  }
+
+ private:
+  StudentImage run(const TestSpec& test, const SceneFiles* scene) {
+    StudentImage s;
+    const bool to_file = args_.run.find("{out}") != std::string::npos;
+    std::error_code ec;
+    const fs::path dir = fs::temp_directory_path() / ("rayfarm-grade-" + std::to_string(getpid()));
+    fs::create_directories(dir, ec);
+    const fs::path out = dir / fs::path(test.image).filename();
+    fs::remove(out, ec);
+    const fs::path scene_path = fs::absolute(base_ / (scene ? scene->path : test.scene), ec);
+    std::string command = replace_all(args_.run, "{scene}", shell_quote(scene_path.string()));
+    command = replace_all(command, "{out}", shell_quote(out.string()));
+    command = replace_all(command, "{name}", shell_quote(test.name));
+    RunOutcome r = run_limited(command, !to_file, args_.timeout, args_.memory_mb);
+    s.seconds = r.seconds;
+    s.log_tail = r.log.size() > kLogTail ? r.log.substr(r.log.size() - kLogTail) : r.log;
+    if (!r.started) {
+      s.error = "your program could not be started";
+      return s;
+    }
+    char took[64];
+    std::snprintf(took, sizeof took, "%.2f s", r.seconds);
+    if (r.timed_out) {
+      s.error = "your program ran past the time limit of " + format_number(args_.timeout) +
+                " s and was stopped";
+      return s;
+    }
+    if (WIFSIGNALED(r.status)) {
+      const int sig = WTERMSIG(r.status);
+      s.note = std::string("your program was killed by signal ") + std::to_string(sig) + " (" +
+               strsignal(sig) + ")" + (sig == SIGXCPU ? ": CPU time limit" : "") + " after " + took;
+    } else if (WEXITSTATUS(r.status) != 0) {
+      s.note = "your program exited with status " + std::to_string(WEXITSTATUS(r.status)) +
+               " after " + took;
+    } else {
+      s.note = std::string("your program ran in ") + took;
+    }
+    std::string bytes;
+    if (to_file) {
+      if (!fs::is_regular_file(out, ec)) {
+        s.error = "your program wrote no image (" + s.note + ")";
+        return s;
+      }
+      bytes = read_input(out.string()).value_or("");
+      fs::remove(out, ec);
+    } else {
+      bytes = std::move(r.output);
+    }
+    std::string error;
+    s.image = decode_image(bytes, &error);
+    if (!s.image) s.error = "your program's image cannot be read: " + error + " (" + s.note + ")";
+    return s;
+  }
+
+  const GradeArgs& args_;
+  fs::path base_;
+  fs::path cache_;
+  std::map<std::string, SceneFiles> scenes_;
+};
+
+fs::path lock_path(const GradeArgs& args) {
+  if (!args.lock.empty()) return args.lock;
+  fs::path p = args.assignment;
+  return p.replace_extension(".lock.json");
+}
+
+// Writes the result: always something the platform can read.
+bool emit(const GradeArgs& args, const GradeResult& result, Format format) {
+  const std::string text = write_result(result, format);
+  if (args.out != "-") {
+    std::error_code ec;
+    const fs::path parent = fs::path(args.out).parent_path();
+    if (!parent.empty()) fs::create_directories(parent, ec);  // PrairieLearn's results/
+  }
+  return write_output(args.out, text.data(), text.size());
+}
+
+}  // namespace
+
+Runner add_grade(CLI::App& app) {
+  auto args = std::make_shared<GradeArgs>();
+  app.add_option("assignment", args->assignment, "the assignment file (JSON)")->required();
+  auto* images = app.add_option("--images", args->images, "folder of the student's images");
+  app.add_option("--run", args->run,
+                 "run the student's program per test: {scene} is the scene's path, {out} the "
+                 "image to write (without {out}, standard output is the image)")
+      ->excludes(images);
+  app.add_option("--format", args->format,
+                 "gradescope, prairielearn, autolab, junit, json, html or md")
+      ->capture_default_str();
+  app.add_option("-o,--output", args->out, "where to write the result (- for standard output)")
+      ->capture_default_str();
+  app.add_option("--timeout", args->timeout, "seconds each run of the program may take")
+      ->capture_default_str()->check(CLI::Range(0.1, 86400.0));
+  app.add_option("--memory", args->memory_mb, "MiB of memory each run may map")
+      ->capture_default_str()->check(CLI::Range(16.0, 1e6));
+  app.add_flag("--freeze", args->freeze,
+               "render the references and write their hashes to the lock file");
+  app.add_option("--lock", args->lock,
+                 "the lock file (default: ASSIGNMENT with .lock.json); grading refuses "
+                 "references that differ from it");
+  app.add_option("--cache", args->cache, "folder of cached references");
+  app.add_flag("--no-cache", args->no_cache, "render every reference afresh");
+  app.add_flag("--no-hints", args->no_hints, "compare only");
+  app.add_option("--fail-under", args->fail_under,
+                 "exit 1 when the score is below this percentage")
+      ->check(CLI::Range(0.0, 100.0));
+  app.add_option("--threads", args->threads, "render threads (0: all cores)")->check(CLI::Range(0, 1024));
+  return [args]() -> int {
+    const std::optional<Format> format = parse_format(args->format);
+    if (!format) {
+      std::cerr << "rayfarm: --format must be gradescope, prairielearn, autolab, junit, json, "
+                   "html or md\n";
+      return kUsage;
+    }
+    if (!args->freeze && args->images.empty() && args->run.empty()) {
+      std::cerr << "rayfarm: give the student's images (--images DIR) or program (--run CMD)\n";
+      return kUsage;
+    }
+    GradeResult result;
+    auto text = read_input(args->assignment);
+    if (!text) {
+      result.error = "cannot read the assignment " + args->assignment;
+      emit(*args, result, *format);
+      return kUsage;
+    }
+    Diagnostics diags;
+    std::optional<Assignment> assignment = parse_assignment(*text, diags);
+    if (!assignment) {
+      std::cerr << format_diagnostics(diags, args->assignment, *text);
+      result.error = "the assignment has errors: " + diags.first_error()->message;
+      if (args->out != "-") emit(*args, result, *format);
+      return kUsage;
+    }
+    const fs::path base = fs::path(args->assignment).parent_path();
+    LocalBackend backend(*args, base.empty() ? fs::path(".") : base);
+    GradeSettings settings;
+    settings.hints = !args->no_hints && !args->freeze;
+    settings.threads = args->threads;
+    result = grade(*assignment, backend, settings);
+
+    const fs::path lock = lock_path(*args);
+    if (args->freeze) {
+      int errors = 0;
+      for (const TestResult& t : result.tests)
+        if (t.reference_sha256.empty()) {
+          std::cerr << "rayfarm: test '" << t.name << "': " << t.message << "\n";
+          ++errors;
+        }
+      if (errors) return kInputError;
+      const std::string body = lock_json(result).dump(2) + "\n";
+      if (!write_output(lock.string(), body.data(), body.size())) return kInputError;
+      std::cerr << "rayfarm: froze " << result.tests.size() << " references in " << lock.string() << "\n";
+      return kOk;
+    }
+    std::error_code ec;
+    if (!args->lock.empty() || fs::exists(lock, ec)) {
+      auto lock_text = read_input(lock.string());
+      nlohmann::json lock_doc = lock_text ? nlohmann::json::parse(*lock_text, nullptr, false)
+                                          : nlohmann::json();
+      std::vector<std::string> problems = lock_doc.is_discarded()
+                                              ? std::vector<std::string>{"the lock file is not JSON"}
+                                              : check_lock(result, lock_doc);
+      if (!problems.empty()) {
+        result.error = "the references are not the ones in " + lock.string() + ": " + problems.front() +
+                       (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : "");
+        for (const std::string& p : problems) std::cerr << "rayfarm: " << p << "\n";
+        emit(*args, result, *format);
+        return kUsage;
+      }
+    }
+    if (!emit(*args, result, *format)) return kInputError;
+    if (args->out != "-")
+      std::cerr << "rayfarm: " << result.assignment << ": " << result.score << " / "
+                << result.max_score << " points\n";
+    if (args->fail_under >= 0 && 100 * result.fraction() < args->fail_under) return kInputError;
+    return kOk;
+  };
+}
+
+}  // namespace rayfarm::cli

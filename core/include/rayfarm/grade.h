@@ -1,0 +1,159 @@
+// Grading students' images against rayfarm's own renders of an assignment's scenes: the
+// assignment file, the pass and credit rules, hints that name the likely mistake, and the
+// result files of the grading platforms (docs/grading.md).
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "rayfarm/compare.h"
+#include "rayfarm/diagnostic.h"
+#include "rayfarm/image.h"
+#include "rayfarm/load.h"
+#include "rayfarm/options.h"
+
+namespace rayfarm::grading {
+
+// How a test's points follow from the comparison.
+struct CreditRule {
+  enum class Kind { all, linear, steps };
+  Kind kind = Kind::all;   // all: full points when the test passes, none otherwise
+  std::string metric;      // linear, steps: bad_fraction, mean_abs, rmse or max_abs
+  double full = 0;         // linear: full points at or below this value of the metric
+  double zero = 0;         //         none at or above this
+  std::vector<std::pair<double, double>> steps;  // (metric at most, fraction of the points)
+};
+
+struct TestSpec {
+  std::string name;
+  std::string scene;  // as written: relative to the assignment file
+  std::string image;  // the student's file name
+  double points = 1;
+  OptionSet options;  // the test's render options (after the assignment's)
+  int threshold = 0;  // a channel difference up to this is no difference (levels)
+  bool neighborhood = false;
+  double max_bad_fraction = 0;  // the test passes with at most this fraction of bad pixels
+  CreditRule credit;
+  std::string visibility = "visible";  // visible, hidden, after_due_date, after_published
+  std::string problem;                 // group (Autolab's problem names); default: the name
+  Where where;                         // of the test in the assignment file
+};
+
+struct Assignment {
+  std::string name;
+  std::vector<TestSpec> tests;
+};
+
+// Reads an assignment (JSON). Problems are reported with their JSON path; nullopt on errors.
+std::optional<Assignment> parse_assignment(std::string_view text, Diagnostics& diags);
+
+// A scene as the grader read it.
+struct SceneFiles {
+  std::string path;  // as the assignment writes it
+  std::string text;
+  std::map<std::string, std::string> textures;  // by the path the scene writes
+  std::shared_ptr<const LoadedScene> loaded;    // with diagnostics; `scene` set when valid
+};
+
+// A student's image, or why there is none.
+struct StudentImage {
+  std::optional<Image> image;
+  std::string error;     // missing or unreadable: what and where
+  std::string note;      // e.g. another file name used, or the program's exit status
+  std::string log_tail;  // a program's output (--run), last part
+  double seconds = 0;    // a program's run time
+};
+
+// Where grading gets its files and renders: the command line reads the disk and renders
+// here; the server reads the request's parts and renders through its queue.
+// The content key of a test's reference (the scene must be loaded with LoadDetail::full).
+std::string reference_key(const SceneFiles& scene, const RenderOptions& options);
+
+class Backend {
+ public:
+  virtual ~Backend() = default;
+  // The scene of a test, read (with its textures) and checked. nullopt with `error`.
+  virtual std::optional<SceneFiles> scene(const std::string& path, std::string* error) = 0;
+  virtual std::optional<Image> render(const SceneFiles& scene, const RenderOptions& options,
+                                      std::string* error) = 0;
+  virtual StudentImage student(const TestSpec& test, const SceneFiles* scene) = 0;
+};
+
+struct Hint {
+  std::string code;
+  std::string message;
+};
+
+struct TestResult {
+  std::string name;
+  std::string problem;
+  std::string visibility;
+  double score = 0;
+  double max_score = 0;
+  std::string status;  // passed, failed, error (the grader could not grade it: no reference)
+  std::string message;  // one line: why it passed or failed
+  std::optional<CompareResult> metrics;
+  int threshold = 0;
+  bool neighborhood = false;
+  double max_bad_fraction = 0;
+  std::vector<Hint> hints;
+  std::optional<Image> reference, student, diff;
+  std::string reference_key;     // content key of the reference render
+  std::string reference_sha256;  // of its pixels (width, height, bytes)
+  std::string student_note, log_tail;
+  bool student_missing = false;  // no readable image
+  double seconds = 0;
+};
+
+struct GradeResult {
+  std::string assignment;
+  std::vector<TestResult> tests;
+  double score = 0;
+  double max_score = 0;
+  std::string error;  // the grader itself failed (e.g. the lock does not match): score 0
+  double seconds = 0;
+
+  double fraction() const { return max_score > 0 ? score / max_score : 0; }
+};
+
+struct GradeSettings {
+  RenderOptions base;  // before the scene's and the test's options (a server's default profile)
+  bool hints = true;
+  int threads = 0;  // for the per-pixel records of hints (0: all cores)
+};
+
+GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSettings& settings);
+
+// The hints for one comparison (grade() calls it; exposed for tests and /compare).
+// `record` renders nothing: `alternative` renders the test's scene with other options.
+std::vector<Hint> find_hints(const Image& reference, const Image& student,
+                             const TestSpec& test, const RenderOptions& options,
+                             const Scene* scene,
+                             const std::function<std::optional<Image>(const RenderOptions&)>&
+                                 alternative,
+                             int threads);
+
+// Lock files: the content key and the pixels' hash of every reference, so that a new
+// version of rayfarm cannot change grades silently.
+nlohmann::json lock_json(const GradeResult& result);
+// Empty when `result` has the references the lock names; else what changed, per test.
+std::vector<std::string> check_lock(const GradeResult& result, const nlohmann::json& lock);
+
+enum class Format { gradescope, prairielearn, autolab, junit, json, html, md };
+std::optional<Format> parse_format(std::string_view name);
+std::string_view to_string(Format f);
+
+// The platform's result file (Autolab: the whole standard output, the score line last).
+std::string write_result(const GradeResult& result, Format format);
+
+std::string sha256_of_image(const Image& image);
+
+}  // namespace rayfarm::grading

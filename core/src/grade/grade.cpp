@@ -1,0 +1,226 @@
+// Grading one assignment: each test's reference rendered by the backend, the student's image
+// compared with the test's rules, points from its credit rule, and hints (hints.cpp).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "rayfarm/grade.h"
+#include "rayfarm/content_key.h"
+#include "rayfarm/render.h"
+#include "rayfarm/sha256.h"
+
+namespace rayfarm::grading {
+namespace {
+
+double metric_value(const CompareResult& m, const std::string& metric) {
+  if (metric == "mean_abs") return m.mean_abs;
+  if (metric == "rmse") return m.rmse;
+  if (metric == "max_abs") return m.max_abs;
+  return m.differing_fraction;
+}
+
+std::string percent(double f) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, f > 0 && f < 0.0001 ? "%.4f%%" : "%.2f%%", 100 * f);
+  return buf;
+}
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+// The fraction of the points the credit rule gives.
+double credit_fraction(const TestSpec& t, const CompareResult& m, bool passed) {
+  const CreditRule& c = t.credit;
+  if (c.kind == CreditRule::Kind::all) return passed ? 1 : 0;
+  const double v = metric_value(m, c.metric);
+  if (c.kind == CreditRule::Kind::linear) {
+    if (v <= c.full) return 1;
+    if (v >= c.zero) return 0;
+    return (c.zero - v) / (c.zero - c.full);
+  }
+  for (const auto& [limit, fraction] : c.steps)
+    if (v <= limit) return fraction;
+  return 0;
+}
+
+double elapsed(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+}  // namespace
+
+std::string reference_key(const SceneFiles& scene, const RenderOptions& options) {
+  return content_key(scene.loaded->desc, options, texture_hashes(*scene.loaded->scene, scene.textures));
+}
+
+std::string sha256_of_image(const Image& image) {
+  std::string bytes = std::to_string(image.width) + "x" + std::to_string(image.height) + "\n";
+  bytes.append(reinterpret_cast<const char*>(image.rgb.data()), image.rgb.size());
+  return sha256_hex(bytes);
+}
+
+GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSettings& settings) {
+  const auto start = std::chrono::steady_clock::now();
+  GradeResult out;
+  out.assignment = assignment.name;
+  for (const TestSpec& t : assignment.tests) {
+    const auto test_start = std::chrono::steady_clock::now();
+    TestResult r;
+    r.name = t.name;
+    r.problem = t.problem;
+    r.visibility = t.visibility;
+    r.max_score = t.points;
+    r.threshold = t.threshold;
+    r.neighborhood = t.neighborhood;
+    r.max_bad_fraction = t.max_bad_fraction;
+    out.max_score += t.points;
+    auto fail = [&](std::string status, std::string message) {
+      r.status = std::move(status);
+      r.message = std::move(message);
+      r.seconds = elapsed(test_start);
+      out.tests.push_back(std::move(r));
+    };
+
+    std::string error;
+    std::optional<SceneFiles> scene = backend.scene(t.scene, &error);
+    if (!scene) {
+      fail("error", "the reference could not be rendered: " + error);
+      continue;
+    }
+    RenderOptions options = settings.base;
+    Diagnostics diags;
+    apply_options(options, scene->loaded->scene->render, diags);
+    apply_options(options, t.options, diags);
+    if (diags.has_errors()) {
+      fail("error", "the test's options: " + diags.first_error()->message);
+      continue;
+    }
+    if (std::string conflict = profile_conflict(options); !conflict.empty()) {
+      fail("error", "the test's options: " + conflict);
+      continue;
+    }
+    std::optional<Image> reference = backend.render(*scene, options, &error);
+    if (!reference) {
+      fail("error", "the reference could not be rendered: " + error);
+      continue;
+    }
+    r.reference_sha256 = sha256_of_image(*reference);
+    r.reference_key = reference_key(*scene, options);
+
+    StudentImage student = backend.student(t, &*scene);
+    r.student_note = student.note;
+    r.log_tail = student.log_tail;
+    r.reference = reference;
+    if (!student.image) {
+      r.student_missing = true;
+      r.hints.push_back({"missing_image", student.error});
+      fail("failed", student.error);
+      continue;
+    }
+    r.student = student.image;
+    const Image& ref = *reference;
+    const Image& mine = *student.image;
+    if (mine.width != ref.width || mine.height != ref.height) {
+      std::string message = "your image is " + std::to_string(mine.width) + "x" +
+                            std::to_string(mine.height) + ", the reference is " +
+                            std::to_string(ref.width) + "x" + std::to_string(ref.height);
+      if (mine.width == ref.height && mine.height == ref.width)
+        message += ": width and height are swapped (pixeldim gives columns, then rows)";
+      else
+        message += ": the image size is the camera's pixeldim (columns, then rows)";
+      r.hints.push_back({"wrong_size", message});
+      fail("failed", message);
+      continue;
+    }
+    CompareOptions copts{t.threshold, t.neighborhood};
+    std::optional<CompareResult> m = compare_images(ref, mine, copts, &error);
+    if (!m) {
+      fail("error", error);
+      continue;
+    }
+    r.metrics = m;
+    const bool passed = m->differing_fraction <= t.max_bad_fraction;
+    r.score = t.points * credit_fraction(t, *m, passed);
+    // Scores to a hundredth of a point (0.1 + 0.2 must sum as a platform shows it).
+    r.score = std::round(r.score * 10000) / 10000;
+    r.status = r.score >= t.points && passed ? "passed" : "failed";
+    if (m->max_abs == 0) {
+      r.message = "identical to the reference";
+    } else {
+      r.message = std::to_string(m->differing_pixels) + " of " +
+                  std::to_string(static_cast<long long>(ref.width) * ref.height) +
+                  " pixels differ by more than " + std::to_string(t.threshold) +
+                  (t.threshold == 1 ? " level" : " levels") +
+                  (t.neighborhood ? " (3x3 neighbourhood)" : "") + " (" +
+                  percent(m->differing_fraction) +
+                  (t.max_bad_fraction > 0 ? "; up to " + percent(t.max_bad_fraction) + " may"
+                                          : "; none may") +
+                  "); mean difference " + num(m->mean_abs) + ", largest " +
+                  std::to_string(m->max_abs);
+      r.diff = diff_image(ref, mine, copts);
+      if (settings.hints) {
+        const Scene* sc = scene->loaded->scene ? &*scene->loaded->scene : nullptr;
+        Backend& b = backend;
+        const SceneFiles& files = *scene;
+        r.hints = find_hints(
+            ref, mine, t, options, sc,
+            [&](const RenderOptions& o) {
+              std::string e;
+              return b.render(files, o, &e);
+            },
+            settings.threads);
+      }
+    }
+    r.seconds = elapsed(test_start);
+    out.score += r.score;
+    out.tests.push_back(std::move(r));
+  }
+  out.score = std::round(out.score * 10000) / 10000;
+  out.seconds = elapsed(start);
+  return out;
+}
+
+nlohmann::json lock_json(const GradeResult& result) {
+  nlohmann::json tests = nlohmann::json::object();
+  for (const TestResult& t : result.tests)
+    if (!t.reference_sha256.empty())
+      tests[t.name] = {{"reference_key", t.reference_key}, {"reference_sha256", t.reference_sha256}};
+  return {{"assignment", result.assignment},
+          {"render_version", kRenderVersion},
+          {"tests", tests}};
+}
+
+std::vector<std::string> check_lock(const GradeResult& result, const nlohmann::json& lock) {
+  std::vector<std::string> problems;
+  if (!lock.is_object() || !lock.contains("tests") || !lock["tests"].is_object())
+    return {"the lock file is not a rayfarm lock (no \"tests\" object)"};
+  const nlohmann::json& tests = lock["tests"];
+  for (const TestResult& t : result.tests) {
+    if (!tests.contains(t.name)) {
+      problems.push_back("test '" + t.name + "' is not in the lock: freeze the assignment again");
+      continue;
+    }
+    const nlohmann::json& l = tests[t.name];
+    const std::string want = l.value("reference_sha256", "");
+    if (t.reference_sha256.empty())
+      problems.push_back("test '" + t.name + "': no reference to check (" + t.message + ")");
+    else if (t.reference_sha256 != want)
+      problems.push_back("test '" + t.name + "': the reference image is not the locked one (" +
+                         (l.value("reference_key", "") == t.reference_key
+                              ? std::string("same scene and options, another rendering")
+                              : std::string("the scene, its options or rayfarm changed")) +
+                         ")");
+  }
+  for (auto it = tests.begin(); it != tests.end(); ++it) {
+    bool present = std::any_of(result.tests.begin(), result.tests.end(),
+                               [&](const TestResult& t) { return t.name == it.key(); });
+    if (!present) problems.push_back("the lock names test '" + it.key() + "', which the assignment no longer has");
+  }
+  return problems;
+}
+
+}  // namespace rayfarm::grading

@@ -1,0 +1,253 @@
+// POST /grade: a student's images graded against an assignment, answered in a platform's
+// format (docs/grading.md). The assignment is uploaded (part 'assignment', its scenes as parts
+// named by the paths it writes, their textures by the paths the scenes write) or named
+// (assignment=NAME, from rayfarmd --assignments-dir). The images are parts named as the
+// tests name them. References render through the job queue (and its cache); the server
+// never runs a student's program.
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "http_util.h"
+#include "rayfarm/grade.h"
+#include "rayfarm/image_io.h"
+#include "routes.h"
+
+namespace rayfarm::server {
+namespace {
+
+namespace fs = std::filesystem;
+using httplib::Request;
+using httplib::Response;
+using namespace rayfarm::grading;
+
+constexpr size_t kMaxTests = 64;
+
+// Files by name: the request's parts, or a stored assignment's folder (never outside it).
+class Files {
+ public:
+  virtual ~Files() = default;
+  virtual std::optional<std::string> read(const std::string& path, std::string& error) const = 0;
+};
+
+class PartFiles final : public Files {
+ public:
+  explicit PartFiles(const Request& req) : req_(req) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override {
+    auto it = req_.files.find(path);
+    if (it == req_.files.end()) {
+      error = "it was not uploaded (send it as a multipart part named '" + path.substr(0, 200) + "')";
+      return std::nullopt;
+    }
+    return it->second.content;
+  }
+
+ private:
+  const Request& req_;
+};
+
+class FolderFiles final : public Files {
+ public:
+  explicit FolderFiles(fs::path root) : root_(fs::weakly_canonical(root)) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override {
+    std::error_code ec;
+    const fs::path file = fs::weakly_canonical(root_ / path, ec);
+    const std::string root = root_.string() + "/";
+    if (ec || fs::path(path).is_absolute() || file.string().rfind(root, 0) != 0) {
+      error = "'" + path.substr(0, 200) + "' is outside the assignment's folder";
+      return std::nullopt;
+    }
+    std::ifstream in(file, std::ios::binary);
+    if (!in || fs::is_directory(file, ec)) {
+      error = "'" + path.substr(0, 200) + "' was not found in the assignment's folder";
+      return std::nullopt;
+    }
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+
+ private:
+  fs::path root_;
+};
+
+// A scene's textures resolve against the scene's own folder (a plain join, checked by Files).
+class SceneTextures final : public ResourceResolver {
+ public:
+  SceneTextures(const Files& files, std::string folder) : files_(files), folder_(std::move(folder)) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override {
+    const std::string full = folder_.empty() ? path : folder_ + "/" + path;
+    auto bytes = files_.read(full, error);
+    if (bytes) read_[path] = *bytes;
+    return bytes;
+  }
+  const TextureFiles& files() const { return read_; }
+
+ private:
+  const Files& files_;
+  std::string folder_;
+  mutable TextureFiles read_;
+};
+
+class ServerBackend final : public Backend {
+ public:
+  ServerBackend(Service& svc, const Request& req, const Files& scenes)
+      : svc_(svc), req_(req), scenes_(scenes), client_(client_of(req)) {}
+
+  std::optional<SceneFiles> scene(const std::string& path, std::string* error) override {
+    if (auto it = cache_.find(path); it != cache_.end()) return it->second;
+    std::string why;
+    auto text = scenes_.read(path, why);
+    if (!text) {
+      *error = "scene '" + path.substr(0, 200) + "': " + why;
+      return std::nullopt;
+    }
+    const size_t slash = path.find_last_of('/');
+    SceneTextures textures(scenes_, slash == std::string::npos ? "" : path.substr(0, slash));
+    auto loaded = std::make_shared<LoadedScene>(load_scene(*text, LoadDetail::full, &textures));
+    if (loaded->diags.has_errors() || !loaded->scene) {
+      *error = format_diagnostics(loaded->diags, path, *text);
+      while (!error->empty() && error->back() == '\n') error->pop_back();
+      return std::nullopt;
+    }
+    SceneFiles s{path, *text, textures.files(), loaded};
+    cache_.emplace(path, s);
+    return s;
+  }
+
+  std::optional<Image> render(const SceneFiles& scene, const RenderOptions& options,
+                              std::string* error) override {
+    Params params;
+    for (auto& [k, v] : option_pairs(options))
+      if (k != "format") params.emplace_back(k, v);
+    ApiError e;
+    auto image = render_and_wait(svc_, scene.text, params, client_, scene.textures, e, nullptr);
+    if (!image) *error = e.message;
+    return image;
+  }
+
+  StudentImage student(const TestSpec& test, const SceneFiles*) override {
+    StudentImage s;
+    auto it = req_.files.find(test.image);
+    if (it == req_.files.end()) {
+      s.error = "your image " + test.image + " was not uploaded";
+      return s;
+    }
+    std::string error;
+    s.image = decode_image(it->second.content, &error);
+    if (!s.image) s.error = "your image " + test.image + " cannot be read: " + error;
+    return s;
+  }
+
+ private:
+  Service& svc_;
+  const Request& req_;
+  const Files& scenes_;
+  std::string client_;
+  std::map<std::string, SceneFiles> cache_;
+};
+
+const char* content_type(Format f) {
+  switch (f) {
+    case Format::junit: return "application/xml";
+    case Format::html: return "text/html; charset=utf-8";
+    case Format::md: return "text/markdown; charset=utf-8";
+    case Format::autolab: return "text/plain; charset=utf-8";
+    default: return "application/json";
+  }
+}
+
+bool plain_name(const std::string& name) {
+  if (name.empty() || name.size() > 100 || name.front() == '.') return false;
+  for (char c : name)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') return false;
+  return true;
+}
+
+}  // namespace
+
+void post_grade(Service& svc, const Request& req, Response& res) {
+  const std::map<std::string, std::string> fields =
+      request_fields(req, {"format", "assignment", "hints"});
+  for (const auto& [k, v] : req.params)
+    if (k != "format" && k != "assignment" && k != "hints") {
+      ApiError e = api_error(400, "invalid_option",
+                             "unknown option '" + k.substr(0, 64) + "': /grade takes format, "
+                             "assignment and hints (render options belong in the assignment)");
+      e.path = k.substr(0, 64);
+      return send_error(res, e);
+    }
+  Format format = Format::json;
+  if (auto it = fields.find("format"); it != fields.end()) {
+    auto f = parse_format(it->second);
+    if (!f)
+      return send_error(res, 400, "invalid_option",
+                        "format must be gradescope, prairielearn, autolab, junit, json, html or md");
+    format = *f;
+  }
+  if (!req.is_multipart_form_data())
+    return send_error(res, 400, "bad_request",
+                      "send multipart form data: the student's images as parts named as the "
+                      "assignment's tests name them, and the assignment (part 'assignment', or "
+                      "assignment=NAME for one stored on the server)");
+  std::string text;
+  std::unique_ptr<Files> files;
+  const auto uploaded = req.files.find("assignment");
+  if (uploaded != req.files.end() && !uploaded->second.filename.empty()) {
+    text = uploaded->second.content;
+    files = std::make_unique<PartFiles>(req);
+  } else if (auto named = fields.find("assignment"); named != fields.end()) {
+    const std::string& name = named->second;
+    const std::string& dir = svc.settings().assignments_dir;
+    if (dir.empty())
+      return send_error(res, 404, "unknown_assignment",
+                        "this server stores no assignments (rayfarmd --assignments-dir)");
+    std::string error;
+    FolderFiles folder(dir);
+    std::optional<std::string> stored =
+        plain_name(name) ? folder.read(name + ".json", error) : std::nullopt;
+    if (!stored)
+      return send_error(res, 404, "unknown_assignment",
+                        "no assignment named '" + name.substr(0, 64) + "' on this server");
+    text = *stored;
+    files = std::make_unique<FolderFiles>(dir);
+  } else {
+    return send_error(res, 400, "bad_request",
+                      "upload the assignment as a file part named 'assignment', or name a "
+                      "stored one with assignment=NAME");
+  }
+  Diagnostics diags;
+  std::optional<Assignment> assignment = parse_assignment(text, diags);
+  if (!assignment) {
+    const Diagnostic* d = diags.first_error();
+    ApiError e = api_error(400, "invalid_assignment", d->message);
+    e.path = d->where.path;
+    if (d->where.line > 0)
+      e.message = "line " + std::to_string(d->where.line) + ", column " +
+                  std::to_string(d->where.column) + ": " + d->message;
+    return send_error(res, e);
+  }
+  if (assignment->tests.size() > kMaxTests)
+    return send_error(res, 413, "too_many_tests",
+                      "the assignment has " + std::to_string(assignment->tests.size()) +
+                          " tests; at most " + std::to_string(kMaxTests) + " are graded at once");
+  // Grading waits for its references: one waiting slot for the whole request.
+  if (!svc.acquire_waiter()) {
+    ApiError e = api_error(503, "busy", "too many requests are waiting for renders; try again");
+    e.retry_after = 2;
+    return send_error(res, e);
+  }
+  struct Release {
+    Service& s;
+    ~Release() { s.release_waiter(); }
+  } release{svc};
+  ServerBackend backend(svc, req, *files);
+  GradeSettings settings;
+  settings.base.profile = svc.settings().default_profile;
+  settings.hints = !(fields.count("hints") && fields.at("hints") == "0");
+  settings.threads = 1;  // the hints' per-pixel record runs on this request's thread only
+  GradeResult result = grade(*assignment, backend, settings);
+  res.status = 200;
+  res.set_content(write_result(result, format), content_type(format));
+}
+
+}  // namespace rayfarm::server

@@ -1,0 +1,502 @@
+// Grading (rayfarm/grade.h): the assignment file and its errors, the pass and credit rules,
+// each hint built from the mistake it names (the student's image is rayfarm's render with
+// that mistake made: another rounding, no shadow test, rows written bottom first, ...), the
+// platforms' result files and the lock.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <regex>
+
+#include "rayfarm/grade.h"
+#include "rayfarm/image_io.h"
+#include "rayfarm/render.h"
+#include "test_util.h"
+
+namespace rayfarm::grading {
+namespace {
+
+using Json = nlohmann::json;
+
+// A small course scene: a floor, a glinting red sphere, a mirror sphere, one light.
+const char* kScene = R"(camera c
+{ pixeldim 64 48
+  worlddim 8 6
+  viewpoint 4 3 6 }
+material floor
+{ ambient 1 1 1
+  diffuse .7 .7 .7 }
+material red
+{ ambient 2 .5 .5
+  diffuse .8 .2 .2
+  specular .4 .4 .4
+  shininess 20 }
+material mirror
+{ ambient .2 .2 .2
+  diffuse .1 .1 .1
+  specular .8 .8 .8 }
+light l
+{ location 1 6 4
+  emissivity 6 6 6 }
+plane ground
+{ material floor
+  normal 0 1 0
+  point 0 0 0 }
+sphere ball
+{ material red
+  center 3 1 -3
+  radius 1 }
+sphere glass
+{ material mirror
+  center 5.5 1.2 -4
+  radius 1.2 }
+)";
+
+class FakeBackend final : public Backend {
+ public:
+  std::map<std::string, std::string> scenes;
+  std::map<std::string, Image> images;
+  std::map<std::string, std::string> unreadable;
+  int renders = 0;
+
+  std::optional<SceneFiles> scene(const std::string& path, std::string* error) override {
+    auto it = scenes.find(path);
+    if (it == scenes.end()) {
+      *error = "no scene " + path;
+      return std::nullopt;
+    }
+    auto loaded = std::make_shared<LoadedScene>(load_scene(it->second, LoadDetail::full));
+    if (!loaded->scene) {
+      *error = loaded->diags.first_error()->message;
+      return std::nullopt;
+    }
+    return SceneFiles{path, it->second, {}, loaded};
+  }
+  std::optional<Image> render(const SceneFiles& s, const RenderOptions& o, std::string* error) override {
+    ++renders;
+    Image image = render_image(*s.loaded->scene, o, 2, nullptr, {}, nullptr, error);
+    if (image.width == 0) return std::nullopt;
+    return image;
+  }
+  StudentImage student(const TestSpec& t, const SceneFiles*) override {
+    StudentImage s;
+    if (auto it = unreadable.find(t.image); it != unreadable.end()) {
+      std::string error;
+      s.image = decode_image(it->second, &error);
+      s.error = "your image " + t.image + " cannot be read: " + error;
+      return s;
+    }
+    auto it = images.find(t.image);
+    if (it == images.end()) s.error = "your image " + t.image + " was not found";
+    else s.image = it->second;
+    return s;
+  }
+};
+
+Assignment parse_ok(const std::string& text) {
+  Diagnostics diags;
+  auto a = parse_assignment(text, diags);
+  EXPECT_TRUE(a) << (diags.first_error() ? diags.first_error()->message : "");
+  return a ? *a : Assignment{};
+}
+
+// The first error of an assignment that must not parse: "PATH: MESSAGE".
+std::string first_error(const std::string& text) {
+  Diagnostics diags;
+  EXPECT_FALSE(parse_assignment(text, diags));
+  const Diagnostic* d = diags.first_error();
+  if (!d) return "";
+  if (d->where.line) return std::to_string(d->where.line) + ":" + std::to_string(d->where.column) + ": " + d->message;
+  return d->where.path + ": " + d->message;
+}
+
+Image render_with(const std::string& text, std::vector<std::pair<std::string, std::string>> options) {
+  Scene scene = test::scene_from(text);
+  RenderOptions o;
+  for (auto& [k, v] : options) EXPECT_FALSE(apply_option(o, k, v)) << k;
+  return render_image(scene, o, 2);
+}
+
+// Grades one test of kScene with the student's image made by `student`.
+TestResult grade_one(const Image& student, const std::string& test_fields = "",
+                     const std::string& profile = "cpsc102", std::string scene = kScene) {
+  FakeBackend b;
+  b.scenes["lab.txt"] = scene;
+  b.images["lab.ppm"] = student;
+  Assignment a = parse_ok(R"({"name": "Lab", "profile": ")" + profile +
+                          R"(", "tests": [{"name": "lab", "scene": "lab.txt")" + test_fields +
+                          "}]}");
+  GradeResult r = grade(a, b, {});
+  EXPECT_EQ(r.tests.size(), 1u);
+  return r.tests.empty() ? TestResult{} : r.tests[0];
+}
+
+std::vector<std::string> codes(const TestResult& t) {
+  std::vector<std::string> out;
+  for (const Hint& h : t.hints) out.push_back(h.code);
+  return out;
+}
+
+bool has(const std::vector<std::string>& v, const std::string& s) {
+  return std::find(v.begin(), v.end(), s) != v.end();
+}
+
+TEST(Assignment, ReadsTestsWithDefaultsFromTheTop) {
+  Assignment a = parse_ok(R"({
+    "name": "Lab 3", "profile": "cpsc102", "threshold": 1, "neighborhood": 1,
+    "tests": [
+      {"name": "one", "scene": "scenes/one.txt", "points": 3},
+      {"name": "two", "scene": "two.json", "image": "out/two.png", "threshold": 0,
+       "max_bad_fraction": 0.01, "options": {"spp": 4, "shadows": false},
+       "credit": {"linear": {"metric": "mean_abs", "full": 0.5, "zero": 8}},
+       "visibility": "after_due_date", "problem": "Shadows"}]})");
+  ASSERT_EQ(a.tests.size(), 2u);
+  EXPECT_EQ(a.name, "Lab 3");
+  EXPECT_EQ(a.tests[0].image, "one.ppm");  // the scene's name with .ppm
+  EXPECT_EQ(a.tests[0].points, 3);
+  EXPECT_EQ(a.tests[0].threshold, 1);
+  EXPECT_TRUE(a.tests[0].neighborhood);
+  EXPECT_EQ(a.tests[0].problem, "one");
+  EXPECT_EQ(a.tests[1].threshold, 0);
+  EXPECT_EQ(a.tests[1].max_bad_fraction, 0.01);
+  EXPECT_EQ(a.tests[1].credit.kind, CreditRule::Kind::linear);
+  EXPECT_EQ(a.tests[1].visibility, "after_due_date");
+  EXPECT_EQ(a.tests[1].problem, "Shadows");
+  // The assignment's profile, then the test's own options.
+  ASSERT_EQ(a.tests[1].options.size(), 3u);
+  EXPECT_EQ(a.tests[1].options[0].name, "profile");
+  for (const OptionValue& o : a.tests[1].options) {
+    if (o.name == "spp") {
+      EXPECT_EQ(o.value, "4");
+    } else if (o.name == "shadows") {
+      EXPECT_EQ(o.value, "0");
+    }
+  }
+}
+
+TEST(Assignment, ErrorsArePlacedByTheirJsonPath) {
+  EXPECT_EQ(first_error(R"({"tests": [{"name": "a", "scene": "a.txt"}]})"),
+            "/name: missing: the assignment's name");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "threshhold": 2}]})"),
+            "/tests/0/threshhold: unknown key 'threshhold'; did you mean 'threshold'?");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "options": {"spp": 0}}]})")
+                .substr(0, 26),
+            "/tests/0/options/spp: must");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "options": {"sppp": 2}}]})")
+                .substr(0, 22),
+            "/tests/0/options/sppp:");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt"}, {"name": "a", "scene": "b.txt"}]})"),
+            "/tests/1/name: another test is named 'a'");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "image": "../a.ppm"}]})"),
+            "/tests/0/image: must be a file name relative to the student's folder, without '..'");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "credit": {"steps": [[0.1, 1], [0.05, 0.5]]}}]})"),
+            "/tests/0/credit/steps/1/0: steps must rise: each limit more than the one before");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "credit": {"linear": {"full": 2, "zero": 1}}}]})"),
+            "/tests/0/credit/linear/zero: must be more than \"full\"");
+  EXPECT_EQ(first_error(R"({"name": "x", "profile": "cpsc103", "tests": [{"name": "a", "scene": "a.txt"}]})").substr(0, 9),
+            "/profile:");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": []})"), "/tests: must be a non-empty list of tests");
+  // Syntax errors have a line and column.
+  EXPECT_EQ(first_error("{\"name\": \"x\",\n  \"tests\": [\n    {\"name\": \"a\" \"scene\": 1}]}").substr(0, 2), "3:");
+}
+
+TEST(Grade, AnIdenticalImagePassesWithFullPoints) {
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  TestResult t = grade_one(ref, R"(, "points": 4)");
+  EXPECT_EQ(t.status, "passed");
+  EXPECT_EQ(t.score, 4);
+  EXPECT_EQ(t.message, "identical to the reference");
+  EXPECT_TRUE(t.hints.empty());
+  EXPECT_FALSE(t.diff);
+  EXPECT_EQ(t.reference_sha256.size(), 64u);
+}
+
+TEST(Grade, MissingUnreadableAndWronglySizedImagesFailWithAHint) {
+  FakeBackend b;
+  b.scenes["lab.txt"] = kScene;
+  b.unreadable["bad.ppm"] = "P6\n64 48\n255\nxyz";
+  Image small(48, 64);
+  b.images["small.ppm"] = small;
+  Assignment a = parse_ok(R"({"name": "Lab", "tests": [
+      {"name": "missing", "scene": "lab.txt"},
+      {"name": "bad", "scene": "lab.txt", "image": "bad.ppm"},
+      {"name": "small", "scene": "lab.txt", "image": "small.ppm"},
+      {"name": "no scene", "scene": "nowhere.txt"}]})");
+  GradeResult r = grade(a, b, {});
+  ASSERT_EQ(r.tests.size(), 4u);
+  EXPECT_EQ(r.tests[0].status, "failed");
+  EXPECT_EQ(codes(r.tests[0]), std::vector<std::string>{"missing_image"});
+  EXPECT_EQ(r.tests[0].message, "your image lab.ppm was not found");
+  EXPECT_TRUE(r.tests[0].student_missing);
+  EXPECT_EQ(codes(r.tests[1]), std::vector<std::string>{"missing_image"});
+  EXPECT_NE(r.tests[1].message.find("cannot be read: "), std::string::npos);
+  EXPECT_EQ(codes(r.tests[2]), std::vector<std::string>{"wrong_size"});
+  EXPECT_EQ(r.tests[2].message,
+            "your image is 48x64, the reference is 64x48: width and height are swapped "
+            "(pixeldim gives columns, then rows)");
+  EXPECT_EQ(r.tests[3].status, "error");
+  EXPECT_EQ(r.score, 0);
+  EXPECT_EQ(r.max_score, 4);
+}
+
+TEST(Grade, CreditRulesGivePartialPoints) {
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  Image off = ref;
+  for (std::uint8_t& v : off.rgb) v = static_cast<std::uint8_t>(std::min(255, v + 4));
+  // mean_abs is a little under 4 (saturated channels stay): between full (1) and zero (7).
+  TestResult linear = grade_one(off, R"(, "points": 10, "credit": {"linear": {"metric": "mean_abs", "full": 1, "zero": 7}})");
+  ASSERT_TRUE(linear.metrics);
+  const double expected = 10 * (7 - linear.metrics->mean_abs) / 6;
+  EXPECT_NEAR(linear.score, expected, 1e-3);
+  EXPECT_EQ(linear.status, "failed");
+  TestResult steps = grade_one(off, R"(, "points": 10, "credit": {"metric": "max_abs", "steps": [[2, 1], [4, 0.5], [8, 0.25]]})");
+  EXPECT_EQ(steps.score, 5);
+  TestResult all = grade_one(off, R"(, "points": 10)");
+  EXPECT_EQ(all.score, 0);
+  TestResult forgiven = grade_one(off, R"(, "points": 10, "threshold": 4)");
+  EXPECT_EQ(forgiven.score, 10);
+  EXPECT_EQ(forgiven.status, "passed");
+  TestResult fraction = grade_one(off, R"(, "points": 10, "max_bad_fraction": 1)");
+  EXPECT_EQ(fraction.status, "passed");
+}
+
+// Each mistake, made: the hint names it.
+TEST(Hints, RoundingWhereTheReferenceTruncates) {
+  const Image mine = render_with(kScene, {{"profile", "cpsc102"}, {"rounding", "nearest"}});
+  TestResult t = grade_one(mine);
+  ASSERT_EQ(codes(t), std::vector<std::string>{"rounding"});
+  EXPECT_NE(t.hints[0].message.find("exactly the reference made with rounding=nearest"), std::string::npos);
+  // A passing test can still carry the hint.
+  TestResult passing = grade_one(mine, R"(, "threshold": 1)");
+  EXPECT_EQ(passing.status, "passed");
+  EXPECT_EQ(codes(passing), std::vector<std::string>{"rounding"});
+}
+
+TEST(Hints, TruncatingWhereTheReferenceRounds) {
+  const Image mine = render_with(kScene, {{"rounding", "truncate"}});
+  EXPECT_EQ(codes(grade_one(mine, "", "lecture")), std::vector<std::string>{"truncation"});
+}
+
+TEST(Hints, UpsideDownMirroredAndSwappedChannels) {
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  Image flipped(ref.width, ref.height), mirrored(ref.width, ref.height), bgr = ref;
+  for (int y = 0; y < ref.height; ++y)
+    for (int x = 0; x < ref.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        flipped.row(ref.height - 1 - y)[3 * x + c] = ref.row(y)[3 * x + c];
+        mirrored.row(y)[3 * (ref.width - 1 - x) + c] = ref.row(y)[3 * x + c];
+      }
+  for (size_t i = 0; i < bgr.rgb.size(); i += 3) std::swap(bgr.rgb[i], bgr.rgb[i + 2]);
+  EXPECT_EQ(codes(grade_one(flipped)), std::vector<std::string>{"upside_down"});
+  EXPECT_EQ(codes(grade_one(mirrored)), std::vector<std::string>{"mirrored"});
+  EXPECT_EQ(codes(grade_one(bgr)), std::vector<std::string>{"red_blue_swapped"});
+}
+
+TEST(Hints, TheLectureEquationWhereTheCourseProgramIsGraded) {
+  const Image mine = render_with(kScene, {{"profile", "lecture"}});
+  EXPECT_EQ(codes(grade_one(mine)), std::vector<std::string>{"lecture_profile"});
+}
+
+TEST(Hints, NoPathCap) {
+  // A polished floor and a far wall: the course's program stops a reflected ray whose path
+  // is already longer than 20 units, so the far floor shows no wall.
+  std::string scene = kScene;
+  const std::string floor = "diffuse .7 .7 .7 }";
+  scene.replace(scene.find(floor), floor.size(), "diffuse .7 .7 .7\n  specular .5 .5 .5 }");
+  scene += "plane wall\n{ material floor\n  normal 0 0 1\n  point 0 0 -15 }\n";
+  const Image mine = render_with(scene, {{"profile", "cpsc102"}, {"max_dist", "unlimited"}});
+  EXPECT_EQ(codes(grade_one(mine, "", "cpsc102", scene)), std::vector<std::string>{"path_cap"});
+}
+
+TEST(Hints, NoReflections) {
+  const Image mine = render_with(kScene, {{"profile", "cpsc102"}, {"max_depth", "0"}});
+  EXPECT_EQ(codes(grade_one(mine)), std::vector<std::string>{"no_reflections"});
+}
+
+TEST(Hints, ABlankImage) {
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  Image black(ref.width, ref.height);
+  EXPECT_EQ(codes(grade_one(black)), std::vector<std::string>{"blank_image"});
+}
+
+TEST(Hints, ErrorsOnlyInShadows) {
+  // No shadow test: the floor under the spheres is lit.
+  const Image mine = render_with(kScene, {{"profile", "cpsc102"}, {"shadows", "0"}});
+  TestResult t = grade_one(mine);
+  EXPECT_TRUE(has(codes(t), "shadows")) << ::testing::PrintToString(codes(t));
+}
+
+TEST(Hints, ErrorsOnlyAtHighlights) {
+  // The Blinn half vector where the lecture's reflected vector is graded.
+  const Image mine = render_with(kScene, {{"highlight", "blinn"}});
+  TestResult t = grade_one(mine, "", "lecture");
+  EXPECT_TRUE(has(codes(t), "highlights")) << ::testing::PrintToString(codes(t));
+}
+
+TEST(Hints, ErrorsOnlyInReflections) {
+  // Reflections stopped one bounce early: only what the mirror shows differs.
+  std::string scene = kScene;
+  const Image mine = render_with(scene, {{"profile", "cpsc102"}, {"max_depth", "1"}});
+  const Image ref = render_with(scene, {{"profile", "cpsc102"}});
+  ASSERT_NE(mine, ref);
+  TestResult t = grade_one(mine);
+  EXPECT_TRUE(has(codes(t), "reflections")) << ::testing::PrintToString(codes(t));
+}
+
+TEST(Hints, ErrorsOnOneObject) {
+  // The red ball's diffuse colour misread (green and blue swapped in its material only).
+  std::string scene = kScene;
+  const std::string from = "diffuse .8 .2 .2", to = "diffuse .8 .25 .2";
+  scene.replace(scene.find(from), from.size(), to);
+  const Image mine = render_with(scene, {{"profile", "cpsc102"}});
+  TestResult t = grade_one(mine);
+  ASSERT_TRUE(has(codes(t), "one_object")) << ::testing::PrintToString(codes(t));
+  for (const Hint& h : t.hints)
+    if (h.code == "one_object") {
+      EXPECT_NE(h.message.find("sphere 'ball'"), std::string::npos);
+    }
+}
+
+TEST(Hints, SpecklesWhereTheReferenceIsSmooth) {
+  // Shadow acne: lone pixels of the lit floor come out dark.
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  Image mine = ref;
+  int made = 0;
+  for (int y = 30; y < ref.height - 2 && made < 12; y += 3)
+    for (int x = 2; x < 20 && made < 12; x += 5) {
+      std::uint8_t* p = mine.row(y) + 3 * x;
+      p[0] = p[1] = p[2] = 0;
+      ++made;
+    }
+  TestResult t = grade_one(mine);
+  EXPECT_TRUE(has(codes(t), "speckles")) << ::testing::PrintToString(codes(t));
+}
+
+TEST(Hints, TheBackgroundOnly) {
+  const Image mine = render_with(kScene, {{"profile", "cpsc102"}, {"background", "0.2,0.2,0.2"}});
+  TestResult t = grade_one(mine);
+  EXPECT_TRUE(has(codes(t), "background")) << ::testing::PrintToString(codes(t));
+}
+
+GradeResult mixed_result() {
+  FakeBackend b;
+  b.scenes["lab.txt"] = kScene;
+  b.images["good.ppm"] = render_with(kScene, {{"profile", "cpsc102"}});
+  b.images["round.ppm"] = render_with(kScene, {{"profile", "cpsc102"}, {"rounding", "nearest"}});
+  Assignment a = parse_ok(R"({"name": "Lab <1> & \"co\"", "profile": "cpsc102", "tests": [
+      {"name": "good", "scene": "lab.txt", "image": "good.ppm", "points": 2, "problem": "Basics"},
+      {"name": "round", "scene": "lab.txt", "image": "round.ppm", "points": 3, "problem": "Basics",
+       "visibility": "after_due_date"},
+      {"name": "gone", "scene": "lab.txt", "image": "gone.ppm", "points": 1}]})");
+  return grade(a, b, {});
+}
+
+TEST(Formats, GradescopeResults) {
+  Json j = Json::parse(write_result(mixed_result(), Format::gradescope));
+  EXPECT_EQ(j["score"], 2);
+  ASSERT_EQ(j["tests"].size(), 3u);
+  EXPECT_EQ(j["tests"][0]["score"], 2);
+  EXPECT_EQ(j["tests"][0]["max_score"], 2);
+  EXPECT_EQ(j["tests"][0]["status"], "passed");
+  EXPECT_EQ(j["tests"][1]["status"], "failed");
+  EXPECT_EQ(j["tests"][1]["visibility"], "after_due_date");
+  EXPECT_EQ(j["tests"][1]["output_format"], "md");
+  EXPECT_NE(j["tests"][1]["output"].get<std::string>().find("[rounding]"), std::string::npos);
+  EXPECT_EQ(j["tests"][2]["score"], 0);
+}
+
+TEST(Formats, PrairieLearnResults) {
+  Json j = Json::parse(write_result(mixed_result(), Format::prairielearn));
+  EXPECT_EQ(j["gradable"], true);
+  EXPECT_NEAR(j["score"].get<double>(), 2.0 / 6, 1e-4);
+  EXPECT_FALSE(j["tests"][0].contains("images"));  // passed: no pictures needed
+  ASSERT_TRUE(j["tests"][1].contains("images"));
+  ASSERT_EQ(j["tests"][1]["images"].size(), 3u);
+  EXPECT_EQ(j["tests"][1]["images"][2]["label"], "Difference");
+  const std::string url = j["tests"][1]["images"][0]["url"];
+  EXPECT_EQ(url.substr(0, 22), "data:image/png;base64,");
+  // The data URL decodes to the reference itself.
+  EXPECT_EQ(j["tests"][1]["points"], 0);
+  EXPECT_EQ(j["tests"][1]["max_points"], 3);
+
+  // No readable image at all: not gradable (no attempt used), with the reasons.
+  FakeBackend b;
+  b.scenes["lab.txt"] = kScene;
+  Assignment a = parse_ok(R"({"name": "Lab", "tests": [{"name": "t", "scene": "lab.txt"}]})");
+  Json none = Json::parse(write_result(grade(a, b, {}), Format::prairielearn));
+  EXPECT_EQ(none["gradable"], false);
+  EXPECT_EQ(none["format_errors"][0], "t: your image lab.ppm was not found");
+}
+
+TEST(Formats, PrairieLearnStaysUnderItsSizeLimit) {
+  // Large failing images are shrunk to share the budget.
+  std::string scene = kScene;
+  scene.replace(scene.find("pixeldim 64 48"), 14, "pixeldim 800 600");
+  FakeBackend b;
+  b.scenes["big.txt"] = scene;
+  Image noise(800, 600);
+  std::uint32_t s = 1;
+  for (std::uint8_t& v : noise.rgb) v = static_cast<std::uint8_t>((s = s * 1664525 + 1013904223) >> 24);
+  b.images["a.ppm"] = noise;
+  b.images["b.ppm"] = noise;
+  Assignment a = parse_ok(R"({"name": "Big", "tests": [{"name": "a", "scene": "big.txt", "image": "a.ppm"},
+                                                      {"name": "b", "scene": "big.txt", "image": "b.ppm"}]})");
+  GradeSettings settings;
+  settings.hints = false;
+  const std::string text = write_result(grade(a, b, settings), Format::prairielearn);
+  EXPECT_LT(text.size(), 1000000u);
+  EXPECT_TRUE(Json::parse(text)["tests"][0].contains("images"));
+}
+
+TEST(Formats, AutolabScoreLineComesLast) {
+  const std::string text = write_result(mixed_result(), Format::autolab);
+  ASSERT_FALSE(text.empty());
+  const std::string body = text.substr(0, text.size() - 1);
+  const std::string last = body.substr(body.find_last_of('\n') + 1);
+  Json j = Json::parse(last);
+  EXPECT_EQ(j["scores"]["Basics"], 2);
+  EXPECT_EQ(j["scores"]["gone"], 0);
+  const std::string before = body.substr(0, body.find_last_of('\n'));
+  Json semantic = Json::parse(before.substr(before.find_last_of('\n') + 1));
+  EXPECT_EQ(semantic["_presentation"], "semantic");
+  EXPECT_EQ(semantic["Images"]["round"]["passed"], false);
+}
+
+TEST(Formats, JUnitMarkdownHtmlAndJson) {
+  const GradeResult r = mixed_result();
+  const std::string xml = write_result(r, Format::junit);
+  EXPECT_NE(xml.find("<testsuite name=\"Lab &lt;1&gt; &amp; &quot;co&quot;\" tests=\"3\" failures=\"2\" errors=\"0\""),
+            std::string::npos);
+  EXPECT_NE(xml.find("<property name=\"score\" value=\"2\"/>"), std::string::npos);
+  EXPECT_EQ(std::count(xml.begin(), xml.end(), '<') - std::count(xml.begin(), xml.end(), '>'), 0);
+  const std::string md = write_result(r, Format::md);
+  EXPECT_NE(md.find("**Score: 2 / 6**"), std::string::npos);
+  EXPECT_NE(md.find("| round | 0 / 3 | failed |"), std::string::npos);
+  const std::string html = write_result(r, Format::html);
+  EXPECT_NE(html.find("<img alt=\"\" src=\"data:image/png;base64,"), std::string::npos);
+  EXPECT_EQ(html.find("<1>"), std::string::npos);  // escaped
+  Json j = Json::parse(write_result(r, Format::json));
+  EXPECT_EQ(j["score"], 2);
+  EXPECT_EQ(j["tests"][1]["hints"][0]["code"], "rounding");
+  EXPECT_TRUE(j["tests"][0]["metrics"]["psnr"].is_null());
+  EXPECT_EQ(j["tests"][0]["metrics"]["identical"], true);
+  // Deterministic: grading again writes the same bytes.
+  EXPECT_EQ(write_result(mixed_result(), Format::json), write_result(r, Format::json));
+}
+
+TEST(Lock, RefusesReferencesThatChanged) {
+  const GradeResult r = mixed_result();
+  Json lock = lock_json(r);
+  EXPECT_TRUE(check_lock(r, lock).empty());
+  Json changed = lock;
+  changed["tests"]["round"]["reference_sha256"] = std::string(64, '0');
+  auto problems = check_lock(r, changed);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("test 'round'"), std::string::npos);
+  Json extra = lock;
+  extra["tests"]["old"] = {{"reference_sha256", "x"}};
+  EXPECT_EQ(check_lock(r, extra).size(), 1u);
+}
+
+}  // namespace
+}  // namespace rayfarm::grading
