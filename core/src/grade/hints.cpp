@@ -2,7 +2,7 @@
 // TA would: the reference transformed (flipped, channels swapped) or rendered with another
 // convention (rounding, profile, path cap, no reflections) matches the student's image where
 // the reference does not; or rayfarm's record of what each pixel met (explain.h) shows the
-// wrong pixels all lie in reflections, shadows, highlights, on one object or on edges.
+// wrong pixels all lie in reflections, shadows, highlights or on one object, or are specks.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -228,41 +228,37 @@ std::vector<Hint> region_hints(const Image& ref, const Image& mine, const TestSp
   std::vector<Hint> hints;
   if (n < 3) return hints;
 
-  // Speckles: isolated wrong pixels where the reference is smooth.
-  long long isolated = 0;
+  // Speckles: scattered wrong pixels (at most two wrong neighbours of eight) where the
+  // reference is smooth. A wrong region is a solid patch; a wrong edge is not smooth.
+  long long specks = 0;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       if (!wrong[static_cast<size_t>(y) * w + x]) continue;
-      bool alone = true, smooth = true;
+      int wrong_near = 0;
+      bool smooth = true;
       const std::uint8_t* p = ref.row(y) + 3 * x;
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const int nx = x + dx, ny = y + dy;
           if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
-          if (wrong[static_cast<size_t>(ny) * w + nx]) alone = false;
+          wrong_near += wrong[static_cast<size_t>(ny) * w + nx];
           const std::uint8_t* q = ref.row(ny) + 3 * nx;
           for (int c = 0; c < 3; ++c) smooth = smooth && std::abs(p[c] - q[c]) <= 8;
         }
-      isolated += alone && smooth;
+      specks += wrong_near <= 2 && smooth;
     }
-  if (n >= 5 && isolated * 10 >= n * 7)
+  if (n >= 5 && specks * 10 >= n * 6)
     hints.push_back({"speckles",
-                     count_of(isolated, n) +
-                         " are lone specks where the reference is smooth: a ray probably hits "
-                         "the surface it starts from (a shadow or reflected ray meeting its own "
-                         "object at t near 0). Skip the object a ray leaves, or start it a "
-                         "little off the surface"});
+                     count_of(specks, n) +
+                         " are scattered specks where the reference is smooth: a ray probably "
+                         "meets the surface it starts from (a shadow or reflected ray hitting "
+                         "its own object at t near 0, \"acne\"). Skip the object a ray leaves, "
+                         "or start it a little off the surface"});
 
   std::string error;
   auto records = record_pixels(scene, options, threads, &error);
   if (!records || records->size() != static_cast<size_t>(total)) return hints;
   const std::vector<PixelRecord>& rec = *records;
-  auto edge = [&](long long i) {
-    const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
-    const int o = rec[i].object;
-    return (x > 0 && rec[i - 1].object != o) || (x + 1 < w && rec[i + 1].object != o) ||
-           (y > 0 && rec[i - w].object != o) || (y + 1 < h && rec[i + w].object != o);
-  };
   struct Region {
     const char* code;
     std::function<bool(long long)> in;
@@ -272,9 +268,6 @@ std::vector<Hint> region_hints(const Image& ref, const Image& mine, const TestSp
   auto flag = [&](int f) { return [&rec, f](long long i) { return (rec[i].flags & f) != 0; }; };
   // In order of preference where two cover the same pixels: the more specific cause first.
   std::vector<Region> regions = {
-      {"silhouettes", edge, "lie on the edges of objects",
-       "check where each pixel's ray crosses the screen: x / (W - 1) * world width for column x, "
-       "and the same for rows"},
       {"shadows", flag(PixelRecord::shadow | PixelRecord::later_shadow),
        "depend on a shadow test (here or in what a reflection shows)",
        "check the shadow test: a ray from the hit point towards the light, blocked only by hits "
@@ -329,7 +322,7 @@ std::vector<Hint> region_hints(const Image& ref, const Image& mine, const TestSp
       found.push_back({f.region->code, count_of(f.wrong, n) + " " + f.region->what + " (" +
                                            share(f.all, total) + " of the image): " +
                                            f.region->advice});
-  hints.insert(hints.begin(), found.begin(), found.end());
+  hints.insert(hints.end(), found.begin(), found.end());
   return hints;
 }
 
