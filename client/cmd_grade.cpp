@@ -371,6 +371,14 @@ Runner add_grade(CLI::App& app) {
       if (args->out != "-") emit(*args, result, *format);
       return kUsage;
     }
+    std::error_code dir_ec;
+    if (!args->images.empty() && !fs::is_directory(args->images, dir_ec)) {
+      result.assignment = assignment->name;
+      result.error = "the images folder " + args->images + " does not exist";
+      std::cerr << "rayfarm: " << result.error << "\n";
+      if (args->out != "-") emit(*args, result, *format);
+      return kUsage;
+    }
     const fs::path base = fs::path(args->assignment).parent_path();
     LocalBackend backend(*args, base.empty() ? fs::path(".") : base);
     GradeSettings settings;
@@ -378,6 +386,9 @@ Runner add_grade(CLI::App& app) {
     settings.threads = args->threads;
     result = grade(*assignment, backend, settings);
 
+    // The platform shows the students a result; the grader's own trouble goes to its log.
+    for (const TestResult& t : result.tests)
+      if (t.status == "error") std::cerr << "rayfarm: test '" << t.name << "': " << t.message << "\n";
     const fs::path lock = lock_path(*args);
     if (args->freeze) {
       int errors = 0;
