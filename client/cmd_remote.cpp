@@ -153,6 +153,10 @@ std::optional<Remote> remote_for(const IdArgs& args) {
     std::cerr << "rayfarm: no server: give --server URL or set RAYFARM_SERVER\n";
     return std::nullopt;
   }
+  if (std::string bad = check_server_url(r.url); !bad.empty()) {
+    std::cerr << "rayfarm: " << bad << "\n";
+    return std::nullopt;
+  }
   if (!valid_id(args.id)) {
     std::cerr << "rayfarm: '" << args.id << "' is not a job id (32 hex digits)\n";
     return std::nullopt;

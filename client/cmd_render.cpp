@@ -39,6 +39,25 @@ ImageFormat format_for(const std::string& out, const OptionFlags& flags) {
   return ext == ".ppm" ? ImageFormat::ppm : ImageFormat::png;
 }
 
+// An output the user would not expect is refused before any work: a name whose extension
+// says another format, or image bytes sent to a terminal.
+std::string check_output(const std::string& out, const OptionFlags& flags) {
+  if (out == "-") {
+    if (isatty(STDOUT_FILENO))
+      return "not writing image bytes to a terminal: redirect standard output (> out.png) or "
+             "give -o FILE";
+    return "";
+  }
+  std::string ext = std::filesystem::path(out).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext.empty()) return "";
+  if (ext != ".png" && ext != ".ppm")
+    return "'" + out + "': rayfarm writes PNG or PPM images; name the file .png or .ppm";
+  if (auto it = flags.values.find("format"); it != flags.values.end() && "." + it->second != ext)
+    return "'" + out + "' says " + ext.substr(1) + " but --format is " + it->second;
+  return "";
+}
+
 std::string si(double v) {
   char buf[32];
   if (v >= 1e9) std::snprintf(buf, sizeof buf, "%.2f G", v / 1e9);
@@ -83,7 +102,15 @@ Runner add_render(CLI::App& app) {
     auto text = read_input(args->scene);
     if (!text) return kInputError;
     std::string out_path = args->out.empty() ? default_output(args->scene) : args->out;
+    if (std::string bad = check_output(out_path, args->flags); !bad.empty()) {
+      std::cerr << "rayfarm: " << bad << "\n";
+      return kUsage;
+    }
     if (std::string url = server_url(args->server); !url.empty()) {
+      if (std::string bad = check_server_url(url); !bad.empty()) {
+        std::cerr << "rayfarm: " << bad << "\n";
+        return kUsage;
+      }
       // Checked here, its textures read as a local render reads them: the server has no
       // access to this machine's files, so they are uploaded with the scene.
       const FileResolver files = FileResolver::beside(args->scene);

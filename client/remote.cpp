@@ -27,9 +27,32 @@ std::string server_url(const std::string& flag) {
   std::string url = flag;
   if (url.empty())
     if (const char* env = std::getenv("RAYFARM_SERVER")) url = env;
+  if (url == "none") return "";  // render here, whatever RAYFARM_SERVER says
   if (!url.empty() && url.find("://") == std::string::npos) url = "http://" + url;
   while (!url.empty() && url.back() == '/') url.pop_back();
   return url;
+}
+
+std::string check_server_url(const std::string& url) {
+  const size_t colon = url.find("://");
+  const std::string scheme = url.substr(0, colon);
+  if (scheme != "http" && scheme != "https")
+    return "'" + url + "' is not a server URL: rayfarmd speaks http:// (or https:// behind a proxy)";
+  const std::string rest = url.substr(colon + 3);
+  if (rest.find('/') != std::string::npos)
+    return "'" + url + "' has a path: give the server's root, http://HOST[:PORT] (rayfarmd's " +
+           "routes start at /)";
+  const size_t port_at = rest.rfind(':');
+  const std::string host = port_at == std::string::npos || rest.back() == ']' ? rest : rest.substr(0, port_at);
+  if (host.empty()) return "'" + url + "' names no host";
+  if (port_at != std::string::npos && rest.back() != ']') {
+    const std::string port = rest.substr(port_at + 1);
+    const bool digits = !port.empty() && port.size() <= 5 &&
+                        port.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits || std::stoi(port) < 1 || std::stoi(port) > 65535)
+      return "'" + url + "': the port must be a number in 1..65535";
+  }
+  return "";
 }
 
 std::string server_token(const std::string& flag) {
@@ -41,7 +64,13 @@ std::string server_token(const std::string& flag) {
 int report_http_error(const httplib::Result& result, const std::string& what,
                       const std::string& scene_name, const std::string* scene_text) {
   if (!result) {
-    std::cerr << "rayfarm: " << what << ": " << httplib::to_string(result.error()) << "\n";
+    const httplib::Error e = result.error();
+    std::string why = httplib::to_string(e);
+    if (e == httplib::Error::Connection)
+      why = "cannot connect (connection refused, or no such host): is rayfarmd running there?";
+    else if (e == httplib::Error::Read || e == httplib::Error::Write)
+      why = "the connection broke off (" + why + "): the server may have stopped or timed out";
+    std::cerr << "rayfarm: " << what << ": " << why << "\n";
     return kServerError;
   }
   int status = result->status;

@@ -21,8 +21,10 @@ struct Remote {
   httplib::Headers headers() const;
 };
 
-// The server URL from the flag or RAYFARM_SERVER; empty when neither is set.
+// The server URL from the flag or RAYFARM_SERVER; empty when neither is set, or for "none".
 std::string server_url(const std::string& flag);
+// What is wrong with a server URL (another scheme, a path, a bad port); empty when it is fine.
+std::string check_server_url(const std::string& url);
 std::string server_token(const std::string& flag);
 
 // Prints a server error body (with FILE:LINE:COL for scene errors) and returns the exit code

@@ -87,6 +87,11 @@ void HttpApi::harden() {
         GuardedServer::close_after(res);
       return httplib::Server::HandlerResponse::Handled;
     }
+    // A request with neither Content-Length nor Transfer-Encoding has an empty body (RFC 9112
+    // §6.3), as `curl -X POST URL` sends it; this cpp-httplib would read until the client
+    // gave up instead.
+    if (!req.has_header("Content-Length") && !req.has_header("Transfer-Encoding"))
+      const_cast<Request&>(req).headers.emplace("Content-Length", "0");
     // curl --data-binary labels a scene as a urlencoded form; this cpp-httplib would then
     // parse the scene as query parameters and refuse bodies over 8 KiB. A scene is text.
     if (req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0) {
@@ -106,7 +111,21 @@ void HttpApi::harden() {
   server_.set_error_handler(httplib::Server::HandlerWithResponse([](const Request& req, Response& res) {
     if (!res.body.empty()) return httplib::Server::HandlerResponse::Unhandled;
     switch (res.status) {
-      case 404: send_error(res, 404, "not_found", "no such resource: " + req.path.substr(0, 100)); break;
+      case 404: {
+        // A known path asked with another method: 405 and what it allows.
+        const std::string allow = allowed_methods(req.path);
+        if (!allow.empty()) {
+          res.set_header("Allow", allow);
+          send_error(res, 405, "method_not_allowed",
+                     req.method.substr(0, 16) + " " + req.path.substr(0, 100) + " is not served; " +
+                         "it takes " + allow);
+          res.status = 405;
+          break;
+        }
+        send_error(res, 404, "not_found",
+                   "no such resource: " + req.path.substr(0, 100) + " (GET / lists the routes)");
+        break;
+      }
       case 405: send_error(res, 405, "method_not_allowed", "method not allowed"); break;
       case 413: send_error(res, 413, "body_too_large", "the request body is too large"); break;
       case 414: send_error(res, 414, "uri_too_long", "the request line is too long"); break;
@@ -178,6 +197,49 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
   return false;
 }
 
+namespace {
+
+struct RouteInfo {
+  const char* method;
+  const char* pattern;  // as bound
+  const char* shown;    // as the index shows it
+  const char* what;
+};
+
+constexpr RouteInfo kRoutes[] = {
+    {"POST", "/render", "/render", "render a scene (body, multipart, or ?sample=NAME); wait=1 answers the image"},
+    {"GET", R"(/jobs/([0-9a-f]{32}))", "/jobs/ID", "a job's status"},
+    {"DELETE", R"(/jobs/([0-9a-f]{32}))", "/jobs/ID", "cancel a job"},
+    {"GET", R"(/jobs/([0-9a-f]{32})/image)", "/jobs/ID/image", "a job's image"},
+    {"GET", R"(/jobs/([0-9a-f]{32})/events)", "/jobs/ID/events", "a job's progress (server-sent events)"},
+    {"GET", "/jobs", "/jobs", "your recent jobs"},
+    {"POST", "/compare", "/compare", "compare two images, or a scene's render with an image"},
+    {"POST", "/grade", "/grade", "grade a student's images against an assignment"},
+    {"GET", "/samples", "/samples", "the bundled scenes"},
+    {"GET", "/healthz", "/healthz", "liveness and queue figures"},
+    {"GET", "/metrics", "/metrics", "Prometheus metrics"},
+    {"GET", "/", "/", "this list"},
+};
+
+}  // namespace
+
+std::string allowed_methods(const std::string& path) {
+  std::string allow;
+  for (const RouteInfo& r : kRoutes)
+    if (std::regex_match(path, std::regex(r.pattern)) && allow.find(r.method) == std::string::npos)
+      allow += (allow.empty() ? "" : ", ") + std::string(r.method);
+  return allow;
+}
+
+void get_index(Service&, const Request&, Response& res) {
+  nlohmann::json routes = nlohmann::json::array();
+  for (const RouteInfo& r : kRoutes)
+    routes.push_back({{"method", r.method}, {"path", r.shown}, {"what", r.what}});
+  send_json(res, 200, {{"service", "rayfarmd"},
+                       {"routes", routes},
+                       {"try", "curl --data-binary @scene.txt 'HOST/render?wait=1' -o out.png"}});
+}
+
 void HttpApi::routes() {
   auto to = [this](RouteHandler handler) {
     return [this, handler](const Request& req, Response& res) { handler(service_, req, res); };
@@ -193,6 +255,7 @@ void HttpApi::routes() {
   server_.Get("/samples", to(get_samples));
   server_.Get("/healthz", to(get_healthz));
   server_.Get("/metrics", to(get_metrics));
+  server_.Get("/", to(get_index));
 }
 
 int HttpApi::bind(const std::string& host, int port) {

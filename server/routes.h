@@ -38,6 +38,10 @@ std::map<std::string, std::string> request_fields(const httplib::Request& req,
 // routes_grade.cpp
 void post_grade(Service& svc, const httplib::Request& req, httplib::Response& res);
 
+// http_api.cpp: GET / lists the routes; the methods a known path takes ("" when unknown).
+void get_index(Service& svc, const httplib::Request& req, httplib::Response& res);
+std::string allowed_methods(const std::string& path);
+
 // routes_info.cpp
 void get_samples(Service& svc, const httplib::Request& req, httplib::Response& res);
 void get_healthz(Service& svc, const httplib::Request& req, httplib::Response& res);

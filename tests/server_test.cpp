@@ -1279,6 +1279,43 @@ TEST(ServerCompare, OptionsComeFromFormFieldsAndUnknownOnesAreRefused) {
   EXPECT_EQ(ident["identical"], true);
 }
 
+// ---- Methods, the index, and requests without a body ----------------------------------
+
+TEST(ServerRoutes, AKnownPathWithAnotherMethodIs405WithAllow) {
+  TestServer server;
+  auto c = server.client();
+  auto get_render = c->Get("/render");
+  ASSERT_TRUE(get_render);
+  EXPECT_EQ(get_render->status, 405);
+  EXPECT_EQ(get_render->get_header_value("Allow"), "POST");
+  EXPECT_EQ(error_of(get_render)["code"], "method_not_allowed");
+  auto put_job = c->Put("/jobs/0123456789abcdef0123456789abcdef", "", "text/plain");
+  ASSERT_TRUE(put_job);
+  EXPECT_EQ(put_job->status, 405);
+  EXPECT_EQ(put_job->get_header_value("Allow"), "GET, DELETE");
+  auto nothing = c->Get("/nothing");
+  ASSERT_TRUE(nothing);
+  EXPECT_EQ(nothing->status, 404);
+  // The root lists the routes.
+  Json index = json_of(c->Get("/"));
+  bool render = false;
+  for (const Json& r : index["routes"]) render |= r["method"] == "POST" && r["path"] == "/render";
+  EXPECT_TRUE(render);
+}
+
+TEST(ServerRoutes, APostWithoutContentLengthHasAnEmptyBody) {
+  TestServer server;
+  RawConnection conn(server.port());
+  // What `curl -X POST URL` sends: no Content-Length, no body.
+  const auto start = Clock::now();
+  ASSERT_TRUE(conn.send("POST /render?sample=minimal&wait=1 HTTP/1.1\r\nHost: x\r\n\r\n"));
+  auto res = conn.read_response(5s);
+  ASSERT_TRUE(res);
+  EXPECT_EQ(res->status, 200);
+  EXPECT_LT(Clock::now() - start, 3s);
+  EXPECT_EQ(res->header("content-type"), "image/png");
+}
+
 // ---- POST /grade -------------------------------------------------------------------------
 
 constexpr const char* kAssignment = R"({"name": "Lab", "profile": "cpsc102", "tests": [

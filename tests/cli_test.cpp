@@ -1,6 +1,6 @@
-// `rayfarm grade` and `rayfarm compare` as a grading platform runs them: the worked example
-// in scenes/assignments/lab1, the lock file, a student's program under --run (its image as a
-// file or on standard output, its exit status and output, a time limit), and exit codes.
+// The command line as its users run it: `rayfarm grade` and `compare` as a grading platform
+// does (the worked example in scenes/assignments/lab1, the lock file, a student's program
+// under --run, exit codes), and `render`'s refusals of outputs and server URLs it cannot use.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -164,6 +164,33 @@ TEST(CompareCli, ExitsAsDiffDoes) {
   EXPECT_TRUE(j["psnr"].is_null());
   EXPECT_EQ(j["identical"], true);
   EXPECT_EQ(j["match"], true);
+}
+
+TEST(RenderCli, RefusesOutputsAndServersItCannotUse) {
+  const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
+  const std::string out = q((fs::temp_directory_path() / "rayfarm-cli-out").string());
+  auto render = [&](const std::string& args) {
+    return run(kRayfarm + " render " + scene + " -q " + args + " 2>&1");
+  };
+  Outcome jpg = render("-o " + out + ".jpg");
+  EXPECT_EQ(jpg.code, 2);
+  EXPECT_NE(jpg.out.find("rayfarm writes PNG or PPM images"), std::string::npos) << jpg.out;
+  EXPECT_EQ(render("-o " + out + ".png --format ppm").code, 2);
+  // A server URL it cannot use is a usage error, never a crash.
+  for (const char* url : {"ftp://x", "http://localhost:8080/api", "http://:80", "http://h:99999"}) {
+    Outcome r = render(std::string("--server ") + url + " -o " + out + ".png");
+    EXPECT_EQ(r.code, 2) << url << ": " << r.out;
+    EXPECT_EQ(r.out.rfind("rayfarm: ", 0), 0u) << r.out;
+  }
+  // Nobody listens on port 1: the message says what to check.
+  Outcome refused = render("--server http://127.0.0.1:1 -o " + out + ".png");
+  EXPECT_EQ(refused.code, 3);
+  EXPECT_NE(refused.out.find("is rayfarmd running there?"), std::string::npos) << refused.out;
+  // `none` renders here, whatever RAYFARM_SERVER says.
+  EXPECT_EQ(run("RAYFARM_SERVER=ftp://x " + kRayfarm + " render " + scene + " -q --server none -o " +
+                out + ".png").code,
+            0);
+  fs::remove(fs::temp_directory_path() / "rayfarm-cli-out.png");
 }
 
 }  // namespace
