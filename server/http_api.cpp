@@ -98,6 +98,7 @@ void HttpApi::harden() {
       auto& headers = const_cast<Request&>(req).headers;  // the library's own, non-const object
       headers.erase("Content-Type");
       headers.emplace("Content-Type", "text/plain");
+      headers.emplace(kFormEncodedMark, "1");  // for a hint if the scene is one line (curl -d)
     }
     return httplib::Server::HandlerResponse::Unhandled;
   });

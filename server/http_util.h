@@ -15,6 +15,9 @@
 
 namespace rayfarm::server {
 
+// Set on a request that came form-encoded (what curl -d and --data-binary send).
+inline constexpr const char* kFormEncodedMark = "X-Rayfarm-Form-Encoded";
+
 void send_json(httplib::Response& res, int status, const nlohmann::json& body);
 void send_error(httplib::Response& res, const ApiError& e);
 void send_error(httplib::Response& res, int status, const std::string& code,

@@ -88,7 +88,14 @@ void post_render(Service& svc, const Request& req, Response& res) {
   for (auto& [k, v] : req.params)
     if (!kControlParams.count(k)) params.emplace_back(k, v);
   Submitted sub = svc.submit(text, params, client_of(req), textures);
-  if (sub.error) return send_error(res, sub.error);
+  if (sub.error) {
+    // `curl -d @scene.txt` strips the newlines: the first comment then swallows the file.
+    if (req.has_header(kFormEncodedMark) && sub.error.status == 400 &&
+        text.find('\n') == std::string::npos && text.size() > 40)
+      sub.error.message += " (the scene arrived as one line: curl -d removes newlines; send "
+                           "the file with --data-binary @FILE)";
+    return send_error(res, sub.error);
+  }
   auto& job = *sub.job;
 
   if (param_true(req, "wait") && answer_when_final(svc, req, res, job)) return;

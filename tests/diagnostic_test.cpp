@@ -1,5 +1,6 @@
 // Diagnostics: the error cap, typo suggestions and the clang-style text users read.
 #include "rayfarm/diagnostic.h"
+#include "rayfarm/load.h"
 
 #include <gtest/gtest.h>
 
@@ -208,6 +209,39 @@ TEST(FormatDiagnostics, PrintsEveryDiagnosticInOrder) {
   diags.error("b", "second", {0, 0, "/x"});
   EXPECT_EQ(format_diagnostics(diags, "f", "abc\n"),
             "f:1:1: error: first\n  abc\n  ^\nf: error: at /x: second\n");
+}
+
+}  // namespace
+}  // namespace rayfarm
+
+namespace rayfarm {
+namespace {
+
+TEST(NotAScene, ImagesAndBinaryDataAreNamedNotParsed) {
+  const std::pair<std::string, std::string> cases[] = {
+      {std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16), "this is a PNG image"},
+      {"P6\n2 2\n255\n\x01\x02\x03", "this is a PPM image"},
+      {"P3\n# comment\n1 1\n255\n0 0 0\n", "this is a PPM image"},
+      {"\xFF\xD8\xFF\xE0", "this is a JPEG image"},
+      {std::string("camera c\0{", 10), "this is binary data"}};
+  for (const auto& [bytes, expected] : cases) {
+    LoadedScene loaded = load_scene(bytes);
+    ASSERT_FALSE(loaded.scene);
+    ASSERT_EQ(loaded.diags.items().size(), 1u) << expected;
+    EXPECT_EQ(loaded.diags.items()[0].message.rfind(expected, 0), 0u) << loaded.diags.items()[0].message;
+  }
+  // A scene that merely starts with a P is a scene.
+  EXPECT_FALSE(load_scene("Plane p { }").diags.items().empty());
+  EXPECT_NE(load_scene("Plane p { }").diags.items()[0].code, "not-a-scene");
+}
+
+TEST(NotAScene, SourceExcerptsNeverCarryControlBytes) {
+  const std::string text = "camera c\n\x1b[31mEVIL\x1b[0m \xC3\xA9t\xE9 sphere\n";
+  LoadedScene loaded = load_scene(text);
+  ASSERT_FALSE(loaded.diags.items().empty());
+  const std::string shown = format_diagnostics(loaded.diags, "esc.txt", text);
+  EXPECT_EQ(shown.find('\x1b'), std::string::npos);
+  EXPECT_NE(shown.find("?[31mEVIL?[0m \xC3\xA9t? sphere"), std::string::npos) << shown;  // UTF-8 kept
 }
 
 }  // namespace

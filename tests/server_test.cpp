@@ -1316,6 +1316,24 @@ TEST(ServerRoutes, APostWithoutContentLengthHasAnEmptyBody) {
   EXPECT_EQ(res->header("content-type"), "image/png");
 }
 
+TEST(ServerRoutes, CurlDashDAndImagesAreNamed) {
+  TestServer server;
+  auto c = server.client();
+  // curl -d @scene.txt: form-encoded, newlines gone.
+  std::string one_line;
+  for (char ch : std::string(kScene))
+    if (ch != '\n' && ch != '\r') one_line += ch;
+  auto r = c->Post("/render?wait=1", one_line, "application/x-www-form-urlencoded");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  EXPECT_NE(error_of(r)["message"].get<std::string>().find("--data-binary"), std::string::npos)
+      << r->body;
+  auto png = c->Post("/render?wait=1", png_bytes(gradient(4, 4)), "application/octet-stream");
+  ASSERT_TRUE(png);
+  EXPECT_EQ(png->status, 400);
+  EXPECT_EQ(error_of(png)["message"].get<std::string>().rfind("this is a PNG image, not a scene", 0), 0u);
+}
+
 // ---- POST /grade -------------------------------------------------------------------------
 
 constexpr const char* kAssignment = R"({"name": "Lab", "profile": "cpsc102", "tests": [

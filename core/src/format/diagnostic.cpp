@@ -97,6 +97,38 @@ std::string_view source_line(std::string_view source, int line) {
 
 }  // namespace
 
+namespace {
+
+// A source line as it may be shown on a terminal: control bytes (an escape sequence in a
+// hostile file) and bytes that are not UTF-8 become '?', one for one, so the caret still
+// lines up.
+std::string printable(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c < 0x80) {
+      out += (c < 0x20 && c != '\t') || c == 0x7F ? '?' : static_cast<char>(c);
+      ++i;
+      continue;
+    }
+    const size_t len = c >= 0xF0 && c <= 0xF4 ? 4 : c >= 0xE0 ? 3 : c >= 0xC2 && c < 0xE0 ? 2 : 0;
+    bool valid = len > 0 && i + len <= text.size();
+    for (size_t k = 1; valid && k < len; ++k)
+      valid = (static_cast<unsigned char>(text[i + k]) & 0xC0) == 0x80;
+    if (valid) {
+      out.append(text.substr(i, len));
+      i += len;
+    } else {
+      out += '?';
+      ++i;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
                               std::string_view source) {
   std::ostringstream out;
@@ -109,7 +141,7 @@ std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
   if (d.where.line > 0) {
     std::string_view text = source_line(source, d.where.line);
     if (!text.empty() && text.size() <= 400) {
-      out << "  " << text << "\n  ";
+      out << "  " << printable(text) << "\n  ";
       // Keep tabs so the caret lines up under the offending column.
       for (int i = 1; i < d.where.column && i <= static_cast<int>(text.size()); ++i)
         out << (text[i - 1] == '\t' ? '\t' : ' ');

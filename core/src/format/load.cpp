@@ -16,9 +16,33 @@ SceneFormat detect_format(std::string_view text) {
   return SceneFormat::model;
 }
 
+namespace {
+
+// What a file that is not a scene at all is, so that it is named rather than parsed into a
+// page of errors (and its bytes never echoed to a terminal).
+std::string not_a_scene(std::string_view text) {
+  if (text.starts_with("\x89PNG")) return "this is a PNG image, not a scene";
+  if (text.starts_with("\xFF\xD8\xFF")) return "this is a JPEG image, not a scene";
+  if (text.starts_with("GIF8")) return "this is a GIF image, not a scene";
+  if (text.size() > 2 && text[0] == 'P' && (text[1] == '3' || text[1] == '6') &&
+      (text[2] == '\n' || text[2] == ' ' || text[2] == '\r' || text[2] == '\t'))
+    return "this is a PPM image, not a scene";
+  if (text.starts_with("PK\x03\x04")) return "this is a zip archive, not a scene";
+  if (text.starts_with("\x1F\x8B")) return "this is gzip-compressed, not a scene";
+  if (text.substr(0, 4096).find('\0') != std::string_view::npos)
+    return "this is binary data, not a scene (it has NUL bytes)";
+  return "";
+}
+
+}  // namespace
+
 LoadedScene load_scene(std::string_view text, LoadDetail detail,
                        const ResourceResolver* resolver) {
   LoadedScene out;
+  if (std::string what = not_a_scene(text); !what.empty()) {
+    out.diags.error("not-a-scene", what + ": a scene is a model file or JSON text", Where{});
+    return out;
+  }
   const SceneFormat format = detect_format(text);
   if (detail == LoadDetail::scene && format == SceneFormat::model) {
     out.scene = load_model_fast(text);
