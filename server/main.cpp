@@ -1,7 +1,9 @@
 // rayfarmd: the render service. SIGTERM/SIGINT stop intake, let running renders finish for
 // the grace period, persist the rest, and exit cleanly.
 #include <csignal>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <pthread.h>
 #include <thread>
@@ -49,10 +51,16 @@ int main(int argc, char** argv) {
     return 1;
   }
   HttpApi api(*service);
+  errno = 0;
   int port = api.bind(settings->host, settings->port);
   if (port < 0) {
-    std::fprintf(stderr, "rayfarmd: cannot listen on %s:%d\n", settings->host.c_str(),
-                 settings->port);
+    const int err = errno;
+    std::fprintf(stderr, "rayfarmd: cannot listen on %s:%d: %s\n", settings->host.c_str(),
+                 settings->port,
+                 err == EADDRINUSE ? "the port is in use (is another rayfarmd running?)"
+                 : err == EACCES   ? "permission denied (ports below 1024 need privileges)"
+                 : err != 0        ? std::strerror(err)
+                                   : "the address cannot be bound");
     return 1;
   }
   std::fprintf(stderr, "rayfarmd: listening on http://%s:%d (%d render workers, results %s)\n",

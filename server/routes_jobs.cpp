@@ -95,7 +95,13 @@ void get_job_image(Service& svc, const Request& req, Response& res) {
     return;
   }
   if (state == JobState::canceled) return send_error(res, 410, "canceled", "the job was canceled");
-  send_json(res, 409, svc.status(*job));
+  // Not done yet: the documented error shape, with the status beside it to poll on.
+  nlohmann::json body = svc.status(*job);
+  body["error"] = {{"code", "not_done"},
+                   {"message", "the job is " + std::string(to_string(state)) +
+                                   "; its image is ready when the state is done"}};
+  res.set_header("Retry-After", "1");
+  send_json(res, 409, body);
 }
 
 void get_job_events(Service& svc, const Request& req, Response& res) {

@@ -1,6 +1,8 @@
 // Settings from flags and environment variables.
 #include "settings.h"
 
+#include "rayfarm/render.h"
+
 #include <CLI/CLI.hpp>
 #include <thread>
 
@@ -9,6 +11,7 @@ namespace rayfarm::server {
 std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   Settings s;
   CLI::App app{"rayfarmd: the rayfarm render service"};
+  app.set_version_flag("--version", "rayfarmd 0.1.0 (render version " + std::to_string(kRenderVersion) + ")");
   std::string tokens;
   std::string profile(to_string(s.default_profile));
   // Read as the render option is, so the accepted names and the message come from its table.

@@ -658,6 +658,8 @@ TEST(ServerJobs, ImageIs409WhileRunningAndPartialShowsProgress) {
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 409);
   EXPECT_EQ(json_of(r)["id"], id);  // the status document
+  EXPECT_EQ(error_of(r)["code"], "not_done");  // in the documented error shape
+  EXPECT_EQ(r->get_header_value("Retry-After"), "1");
 
   auto partial = c->Get("/jobs/" + id + "/image?partial=1");
   ASSERT_TRUE(partial);
