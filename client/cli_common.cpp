@@ -79,7 +79,14 @@ void OptionFlags::add_to(CLI::App& app) {
       if (c == '_') c = '-';
     std::string flags = "--" + dashed + (dashed != name ? ",--" + name : "");
     app.add_option_function<std::string>(
-           flags, [this, name](const std::string& v) { values[name] = v; },
+           flags,
+           [this, name, dashed](const std::string& v) {
+             // A value the option cannot take is a usage error (exit 2), said at once.
+             RenderOptions probe;
+             if (auto bad = apply_option(probe, name, v))
+               throw CLI::ValidationError("--" + dashed, *bad);
+             values[name] = v;
+           },
            std::string(spec.help))
         ->type_name(std::string(spec.value_help));
   }

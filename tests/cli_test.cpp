@@ -176,6 +176,10 @@ TEST(RenderCli, RefusesOutputsAndServersItCannotUse) {
   EXPECT_EQ(jpg.code, 2);
   EXPECT_NE(jpg.out.find("rayfarm writes PNG or PPM images"), std::string::npos) << jpg.out;
   EXPECT_EQ(render("-o " + out + ".png --format ppm").code, 2);
+  // A flag's bad value is a usage error, said with the flag's name.
+  Outcome spp = render("-o " + out + ".png --spp 0");
+  EXPECT_EQ(spp.code, 2);
+  EXPECT_EQ(spp.out.rfind("--spp: must be an integer in 1..", 0), 0u) << spp.out;
   // A server URL it cannot use is a usage error, never a crash.
   for (const char* url : {"ftp://x", "http://localhost:8080/api", "http://:80", "http://h:99999"}) {
     Outcome r = render(std::string("--server ") + url + " -o " + out + ".png");
