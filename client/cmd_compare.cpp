@@ -70,19 +70,19 @@ Runner add_compare(CLI::App& app) {
       j["max_bad_fraction"] = args->max_bad_fraction;
       std::cout << j.dump(2) << "\n";
     } else {
-      std::printf("size              %dx%d\n", r->width, r->height);
-      std::printf("rmse              %.4f levels\n", r->rmse);
-      if (std::isinf(r->psnr)) std::printf("psnr              inf (identical)\n");
-      else std::printf("psnr              %.2f dB\n", r->psnr);
-      std::printf("max_abs           %d\n", r->max_abs);
-      std::printf("mean_abs          %.4f\n", r->mean_abs);
-      std::printf("differing_pixels  %lld (%.4f%%, threshold %d%s)\n", r->differing_pixels,
+      std::printf("size                %dx%d\n", r->width, r->height);
+      std::printf("rmse                %.4f levels\n", r->rmse);
+      if (std::isinf(r->psnr)) std::printf("psnr                inf (identical)\n");
+      else std::printf("psnr                %.2f dB\n", r->psnr);
+      std::printf("max_abs             %d\n", r->max_abs);
+      std::printf("mean_abs            %.4f\n", r->mean_abs);
+      std::printf("differing_pixels    %lld (%.4f%%, threshold %d%s)\n", r->differing_pixels,
                   100 * r->differing_fraction, options.threshold,
                   options.neighborhood ? ", 3x3 neighbourhood" : "");
-      std::printf("off_by_more_than_1 %lld\n", r->off_by_more_than_1);
-      std::printf("differing_channels %lld of %lld\n", r->differing_channels,
+      std::printf("off_by_more_than_1  %lld\n", r->off_by_more_than_1);
+      std::printf("differing_channels  %lld of %lld\n", r->differing_channels,
                   3LL * r->width * r->height);
-      std::printf("match             %s\n", match ? "yes" : "no");
+      std::printf("match               %s\n", match ? "yes" : "no");
     }
     return match ? kOk : kDiffer;
   };

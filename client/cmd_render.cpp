@@ -11,6 +11,7 @@
 #include "progress_bar.h"
 #include "remote.h"
 #include "rayfarm/image_io.h"
+#include "rayfarm/lint.h"
 #include "rayfarm/render.h"
 
 namespace rayfarm::cli {
@@ -58,12 +59,13 @@ std::string check_output(const std::string& out, const OptionFlags& flags) {
   return "";
 }
 
-std::string si(double v) {
-  char buf[32];
-  if (v >= 1e9) std::snprintf(buf, sizeof buf, "%.2f G", v / 1e9);
-  else if (v >= 1e6) std::snprintf(buf, sizeof buf, "%.2f M", v / 1e6);
-  else if (v >= 1e3) std::snprintf(buf, sizeof buf, "%.1f k", v / 1e3);
-  else std::snprintf(buf, sizeof buf, "%.0f ", v);
+// "6.79 Mrays/s", "1.2 k primary", "12 rays/s", "0 shadow".
+std::string si(double v, const char* unit) {
+  char buf[64];
+  if (v >= 1e9) std::snprintf(buf, sizeof buf, "%.2f G%s", v / 1e9, unit);
+  else if (v >= 1e6) std::snprintf(buf, sizeof buf, "%.2f M%s", v / 1e6, unit);
+  else if (v >= 1e3) std::snprintf(buf, sizeof buf, "%.1f k%s", v / 1e3, unit);
+  else std::snprintf(buf, sizeof buf, "%.0f%s%s", v, unit[0] == ' ' ? "" : " ", unit);
   return buf;
 }
 
@@ -75,10 +77,11 @@ void print_summary(const std::string& out, int w, int h, const RenderStats& st, 
                st.spp_done);
   if (st.spp_done != st.spp_target) std::fprintf(stderr, "/%d (%s)", st.spp_target,
                                                  st.stop_reason.c_str());
-  std::fprintf(stderr, ", %.1f ms (render %.1f ms), %srays/s (%s primary, %s shadow, %s reflection)",
-               total_ms, st.render_ms, si(secs > 0 ? st.total_rays() / secs : 0).c_str(),
-               si(st.primary_rays).c_str(), si(st.shadow_rays).c_str(),
-               si(st.reflection_rays).c_str());
+  std::fprintf(stderr, ", %.1f ms (render %.1f ms), %s (%s, %s, %s)", total_ms, st.render_ms,
+               si(secs > 0 ? st.total_rays() / secs : 0, "rays/s").c_str(),
+               si(static_cast<double>(st.primary_rays), " primary").c_str(),
+               si(static_cast<double>(st.shadow_rays), " shadow").c_str(),
+               si(static_cast<double>(st.reflection_rays), " reflection").c_str());
   if (st.error_estimate >= 0) std::fprintf(stderr, ", error estimate %.3f levels", st.error_estimate);
   std::fprintf(stderr, "; parts: %s\n", parts.c_str());
 }
@@ -128,6 +131,13 @@ Runner add_render(CLI::App& app) {
     if (!options) return kInputError;
     const std::string& out = out_path;
     options->format = format_for(out, args->flags);
+    if (!args->quiet) {
+      // What `check` would warn about (a sphere behind the eye, a light inside an object):
+      // a black image with no word is the worst answer to such a scene.
+      Diagnostics lints;
+      lint_scene(*loaded->scene, *options, lints);
+      for (const Diagnostic& d : lints.items()) std::cerr << format_diagnostic(d, display_name(args->scene), *text);
+    }
 
     ProgressBar bar(isatty(STDERR_FILENO) && !args->quiet);
     RenderStats stats;

@@ -85,8 +85,15 @@ void post_render(Service& svc, const Request& req, Response& res) {
     return send_error(res, 400, "empty_scene",
                       "the request has no scene: send a model file or a JSON scene as the body");
   Params params;
-  for (auto& [k, v] : req.params)
+  for (auto& [k, v] : req.params) {
+    // spp=4&spp=8: which one was meant? (The command line refuses a repeated flag too.)
+    if (req.params.count(k) > 1) {
+      ApiError e = api_error(400, "invalid_option", "'" + k.substr(0, 64) + "' is given more than once");
+      e.path = k.substr(0, 64);
+      return send_error(res, e);
+    }
     if (!kControlParams.count(k)) params.emplace_back(k, v);
+  }
   Submitted sub = svc.submit(text, params, client_of(req), textures);
   if (sub.error) {
     // `curl -d @scene.txt` strips the newlines: the first comment then swallows the file.

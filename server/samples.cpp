@@ -1,5 +1,6 @@
 // The sample scenes offered by GET /samples and /render?sample=NAME: each .txt or .json file
 // of the samples directory that loads (with its textures), described by its first comment.
+#include <cstdio>
 #include <algorithm>
 #include <fstream>
 #include <sstream>
@@ -50,7 +51,12 @@ const Sample* Service::sample(const std::string& name) const {
 void Service::load_samples() {
   fs::path dir = settings_.samples_dir;
   std::error_code ec;
-  if (dir.empty() || !fs::is_directory(dir, ec)) return;
+  if (dir.empty()) return;
+  if (!fs::is_directory(dir, ec)) {
+    std::fprintf(stderr, "rayfarmd: warning: --samples-dir %s is not a directory: no samples\n",
+                 dir.string().c_str());
+    return;
+  }
   for (auto& e : fs::directory_iterator(dir, ec)) {
     auto ext = e.path().extension();
     if (ext != ".txt" && ext != ".json") continue;

@@ -93,8 +93,14 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     return {nullptr, e};
   }
   auto camera = scene->find_camera(options.camera);
-  if (!camera)
-    return {nullptr, api_error(400, "invalid_option", "no camera named '" + options.camera + "'")};
+  if (!camera) {
+    std::string names;
+    for (const Camera& c : scene->cameras) names += (names.empty() ? "" : ", ") + c.name;
+    ApiError e = api_error(400, "invalid_option",
+                           "no camera named '" + options.camera.substr(0, 64) + "'; the scene's cameras: " + names);
+    e.path = "camera";
+    return {nullptr, e};
+  }
   const Camera& cam = scene->cameras[*camera];
   int width = options.width > 0 ? options.width : cam.width;
   int height = options.height > 0 ? options.height : cam.height;

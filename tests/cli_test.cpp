@@ -180,6 +180,15 @@ TEST(RenderCli, RefusesOutputsAndServersItCannotUse) {
   Outcome spp = render("-o " + out + ".png --spp 0");
   EXPECT_EQ(spp.code, 2);
   EXPECT_EQ(spp.out.rfind("--spp: must be an integer in 1..", 0), 0u) << spp.out;
+  // What check would warn about, render says too (and still renders).
+  const fs::path behind = fs::temp_directory_path() / "rayfarm-cli-behind.txt";
+  std::ofstream(behind) << "camera c\n{ pixeldim 8 6\n  worlddim 8 6\n  viewpoint 4 3 5 }\n"
+                           "material m\n{ diffuse 1 1 1 }\nlight l\n{ location 4 3 2 }\n"
+                           "sphere s\n{ material m\n  center 4 3 10\n  radius 1 }\n";
+  Outcome warned = run(kRayfarm + " render " + q(behind.string()) + " -o " + out + ".png 2>&1");
+  EXPECT_EQ(warned.code, 0);
+  EXPECT_NE(warned.out.find("warning: sphere 's' is behind the eye"), std::string::npos) << warned.out;
+  fs::remove(behind);
   // A server URL it cannot use is a usage error, never a crash.
   for (const char* url : {"ftp://x", "http://localhost:8080/api", "http://:80", "http://h:99999"}) {
     Outcome r = render(std::string("--server ") + url + " -o " + out + ".png");

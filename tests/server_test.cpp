@@ -1336,6 +1336,19 @@ TEST(ServerRoutes, CurlDashDAndImagesAreNamed) {
   EXPECT_EQ(error_of(png)["message"].get<std::string>().rfind("this is a PNG image, not a scene", 0), 0u);
 }
 
+TEST(ServerRoutes, RepeatedOptionsAndUnknownCamerasAreNamed) {
+  TestServer server;
+  auto c = server.client();
+  auto twice = c->Post("/render?spp=4&spp=8", kScene, "text/plain");
+  ASSERT_TRUE(twice);
+  EXPECT_EQ(twice->status, 400);
+  EXPECT_EQ(error_of(twice)["message"], "'spp' is given more than once");
+  auto camera = c->Post("/render?camera=nope", kScene, "text/plain");
+  ASSERT_TRUE(camera);
+  EXPECT_EQ(camera->status, 400);
+  EXPECT_EQ(error_of(camera)["message"], "no camera named 'nope'; the scene's cameras: cam1");
+}
+
 // ---- POST /grade -------------------------------------------------------------------------
 
 constexpr const char* kAssignment = R"({"name": "Lab", "profile": "cpsc102", "tests": [
