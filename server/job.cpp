@@ -1,9 +1,10 @@
 // Job states and the status document.
 #include "job.h"
 
-#include <chrono>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
 
 namespace rayfarm::server {
 
@@ -61,6 +62,36 @@ std::string json_text(const nlohmann::json& j) {
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
+namespace {
+
+// An option's text as the JSON value it is: 16 and 0.5 numbers, true and false booleans, a
+// colour "0.1,0.2,0.3" an array; words ("unlimited", "cpsc102") stay strings.
+nlohmann::json typed_value(const std::string& v) {
+  if (v == "true") return true;
+  if (v == "false") return false;
+  if (!v.empty() && v.find_first_not_of("0123456789") == std::string::npos && v.size() <= 19)
+    return std::stoull(v);
+  if (v.find(',') != std::string::npos) {
+    nlohmann::json parts = nlohmann::json::array();
+    size_t start = 0;
+    while (start <= v.size()) {
+      size_t end = v.find(',', start);
+      if (end == std::string::npos) end = v.size();
+      nlohmann::json part = typed_value(v.substr(start, end - start));
+      if (!part.is_number()) return v;
+      parts.push_back(part);
+      start = end + 1;
+    }
+    return parts;
+  }
+  char* end = nullptr;
+  const double d = std::strtod(v.c_str(), &end);
+  if (!v.empty() && end && *end == '\0' && std::isfinite(d)) return d;
+  return v;
+}
+
+}  // namespace
+
 nlohmann::json job_status(const Job& job, int queue_position) {
   std::lock_guard lock(job.mu);
   const RenderStats& st = job.stats;
@@ -93,7 +124,7 @@ nlohmann::json job_status(const Job& job, int queue_position) {
                 {"stop_reason", st.stop_reason},
                 {"cache", job.cache_hit ? "hit" : "miss"}};
   nlohmann::json opts = nlohmann::json::object();
-  for (auto& [k, v] : option_pairs(job.options)) opts[k] = v;
+  for (auto& [k, v] : option_pairs(job.options)) opts[k] = typed_value(v);
   opts["width"] = job.width;
   opts["height"] = job.height;
   j["options"] = opts;

@@ -626,7 +626,9 @@ TEST(ServerJobs, StatusHasTheSpecFields) {
   EXPECT_TRUE(st["stats"]["rays"].contains("reflection"));
   EXPECT_TRUE(st["stats"].contains("rays_per_second"));
   EXPECT_TRUE(st["stats"]["parts"].is_array());
-  EXPECT_EQ(st["options"]["spp"], "3");
+  EXPECT_EQ(st["options"]["spp"], 3);  // typed, as in a JSON scene
+  EXPECT_EQ(st["options"]["shadows"], true);
+  EXPECT_EQ(st["options"]["background"], Json::array({0, 0, 0}));
   EXPECT_TRUE(st["error"].is_null());
 }
 
@@ -978,8 +980,8 @@ TEST(ServerProfiles, DefaultProfileAppliesWhenNeitherRequestNorSceneNamesOne) {
   Json opts = status_of(*c, plain.id)["options"];
   EXPECT_EQ(opts["profile"], "cpsc102");
   EXPECT_EQ(opts["rounding"], "truncate");
-  EXPECT_EQ(opts["max_dist"], "20");
-  EXPECT_EQ(opts["max_depth"], "64");
+  EXPECT_EQ(opts["max_dist"], 20);
+  EXPECT_EQ(opts["max_depth"], 64);
 
   // The lecture profile is another entry, here and on a lecture server.
   Rendered lect = render_waiting(*c, "profile=lecture");
@@ -989,7 +991,7 @@ TEST(ServerProfiles, DefaultProfileAppliesWhenNeitherRequestNorSceneNamesOne) {
   EXPECT_EQ(opts["profile"], "lecture");
   EXPECT_EQ(opts["rounding"], "nearest");
   EXPECT_EQ(opts["max_dist"], "unlimited");
-  EXPECT_EQ(opts["max_depth"], "8");
+  EXPECT_EQ(opts["max_depth"], 8);
   EXPECT_NE(lect.png, plain.png);  // the floor beyond MAX_DIST 20
   EXPECT_EQ(render_waiting(*l, "").key, lect.key);
   EXPECT_EQ(render_waiting(*l, "profile=cpsc102").key, plain.key);
@@ -1138,7 +1140,7 @@ TEST(ServerRestart, InterruptedJobRunsAgainAfterARestart) {
   auto c = server.client("alice");
   Json st = wait_final(*c, id, 120s);
   EXPECT_EQ(st["state"], "done") << st.dump();
-  EXPECT_EQ(st["options"]["spp"], "512");
+  EXPECT_EQ(st["options"]["spp"], 512);
   auto r = c->Get("/jobs/" + id + "/image");
   ASSERT_TRUE(r);
   ASSERT_EQ(r->status, 200);
@@ -2167,7 +2169,7 @@ TEST(ServerHardening, CurlStyleFormUploadOver8KiBWorks) {
   auto c = server.client();
   Json st = wait_final(*c, id);
   EXPECT_EQ(st["state"], "done");
-  EXPECT_EQ(st["options"]["spp"], "2");
+  EXPECT_EQ(st["options"]["spp"], 2);
 }
 
 TEST(ServerConnections, KeepAliveAndPipelinedRequestsAreServed) {
