@@ -116,6 +116,9 @@ RunOutcome run_limited(const std::string& command, bool stdout_is_image, double 
   std::string* sinks[2] = {stdout_is_image ? &r.output : &r.log, &r.log};
   int open_fds = 2;
   char buf[65536];
+  bool reaped = false;
+  // Reads until both pipes close, or the program has exited and left something holding them
+  // (a background child): then what is already there is read, and the group is ended.
   while (open_fds > 0) {
     const double left =
         timeout - std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -123,7 +126,11 @@ RunOutcome run_limited(const std::string& command, bool stdout_is_image, double 
       r.timed_out = true;
       break;
     }
-    if (poll(fds, 2, static_cast<int>(std::min(left, 1.0) * 1000) + 1) < 0 && errno != EINTR) break;
+    if (!reaped && waitpid(pid, &r.status, WNOHANG) == pid) reaped = true;
+    const int wait_ms = reaped ? 50 : static_cast<int>(std::min(left, 0.2) * 1000) + 1;
+    const int ready = poll(fds, 2, wait_ms);
+    if (ready < 0 && errno != EINTR) break;
+    if (ready == 0 && reaped) break;
     for (int i = 0; i < 2; ++i) {
       if (fds[i].fd < 0 || !(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
       const ssize_t n = read(fds[i].fd, buf, sizeof buf);
@@ -143,7 +150,7 @@ RunOutcome run_limited(const std::string& command, bool stdout_is_image, double 
   kill(-pid, SIGKILL);
   for (pollfd& f : fds)
     if (f.fd >= 0) close(f.fd);
-  waitpid(pid, &r.status, 0);
+  if (!reaped) waitpid(pid, &r.status, 0);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }

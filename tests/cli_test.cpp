@@ -135,6 +135,12 @@ TEST_F(GradeCli, AStudentsProgramUnderRun) {
   // The image on standard output.
   Json stdout_image = grade(assignment + " --run " + q("cat " + ada + "/$(basename {scene} .txt).png"));
   EXPECT_EQ(stdout_image["score"], 10);
+  // A program that ends but leaves a child holding its output is done when it ends.
+  const auto quick = std::chrono::steady_clock::now();
+  Json detached = grade(assignment + " --timeout 20 --run " +
+                        q("sleep 30 & cp " + ada + "/$(basename {scene} .txt).png {out}"));
+  EXPECT_LT(std::chrono::steady_clock::now() - quick, std::chrono::seconds(10));
+  EXPECT_EQ(detached["score"], 10);
   // A program that never ends is stopped at the time limit, children and all.
   const auto start = std::chrono::steady_clock::now();
   Json slow = grade(assignment + " --timeout 0.5 --run " + q("sleep 30 & sleep 30"));
