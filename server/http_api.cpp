@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <ctime>
 #include <regex>
 
 #include "http_util.h"
@@ -80,6 +81,8 @@ void HttpApi::harden() {
   server_.set_pre_routing_handler([this](const Request& req, Response& res) {
     request_start = Clock::now();
     GuardedServer::head_complete();
+    // Only the server names the client: a header claiming a name is not the client's to send.
+    const_cast<Request&>(req).headers.erase(kClientHeader);
     if (refuse(req, res)) {
       // The body (if any) is not read: it must not be taken for the next request.
       if (req.has_header("Transfer-Encoding") ||
@@ -139,10 +142,17 @@ void HttpApi::harden() {
   server_.set_logger([this](const Request& req, const Response& res) {
     double ms = std::chrono::duration<double, std::milli>(Clock::now() - request_start).count();
     service_.metrics().request(route_label(req.method, req.path), res.status);
-    if (service_.settings().access_log)
-      std::fprintf(stderr, "%s %s %d %zu %.1fms %s\n", req.method.c_str(),
+    if (service_.settings().access_log) {
+      // When, what, the answer, and who: by roster name where there is one.
+      char when[32];
+      const std::time_t now = std::time(nullptr);
+      std::tm tm{};
+      gmtime_r(&now, &tm);
+      std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &tm);
+      std::fprintf(stderr, "%s %s %s %d %zu %.1fms %s\n", when, req.method.c_str(),
                    req.path.substr(0, 200).c_str(), res.status, res.body.size(), ms,
                    client_of(req).c_str());
+    }
   });
 }
 
@@ -185,9 +195,18 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
     send_error(res, 416, "range_not_satisfiable", "multi-range requests are not supported");
     return true;
   }
-  if (!st.tokens.empty() && req.path != "/healthz" && req.path != "/metrics") {
+  const bool roster = !st.tokens_file.empty();
+  if ((roster || !st.tokens.empty()) && req.path != "/healthz" && req.path != "/metrics") {
     std::string token = bearer_token(req);
     bool ok = false;
+    if (roster && !token.empty()) {
+      if (std::optional<RosterEntry> who = service_.roster().find(token)) {
+        auto& headers = const_cast<Request&>(req).headers;  // the library's own object
+        headers.erase(kClientHeader);
+        headers.emplace(kClientHeader, "name:" + who->name);
+        ok = true;
+      }
+    }
     for (const std::string& t : st.tokens) ok |= constant_time_equal(token, t);
     if (!ok) {
       res.set_header("WWW-Authenticate", "Bearer");

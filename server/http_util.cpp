@@ -93,6 +93,8 @@ std::string bearer_token(const Request& req) {
 }
 
 std::string client_of(const Request& req) {
+  // Set by the server itself for a roster token (any such header a client sent is dropped).
+  if (req.has_header(kClientHeader)) return req.get_header_value(kClientHeader);
   std::string token = bearer_token(req);
   if (!token.empty()) return "token:" + sha256_hex(token).substr(0, 16);
   return "addr:" + req.remote_addr;

@@ -17,6 +17,8 @@ namespace rayfarm::server {
 
 // Set on a request that came form-encoded (what curl -d and --data-binary send).
 inline constexpr const char* kFormEncodedMark = "X-Rayfarm-Form-Encoded";
+// Who asked, by roster name ("name:alice"), as the server found it from the token.
+inline constexpr const char* kClientHeader = "X-Rayfarm-Client";
 
 void send_json(httplib::Response& res, int status, const nlohmann::json& body);
 void send_error(httplib::Response& res, const ApiError& e);
@@ -39,7 +41,8 @@ ApiError texture_parts(const httplib::Request& req, std::initializer_list<std::s
 
 // The token of an `Authorization: Bearer` header; empty when there is none.
 std::string bearer_token(const httplib::Request& req);
-// Who is asking: the bearer token's digest, else the socket's address (never a header).
+// Who is asking: the roster's name for the token, else the token's digest, else the
+// socket's address (never a header the client set).
 std::string client_of(const httplib::Request& req);
 
 }  // namespace rayfarm::server

@@ -128,6 +128,8 @@ nlohmann::json job_status(const Job& job, int queue_position) {
   opts["width"] = job.width;
   opts["height"] = job.height;
   j["options"] = opts;
+  // Who it belongs to, by roster name (an address or a token's digest is nobody's business).
+  if (job.client.rfind("name:", 0) == 0) j["owner"] = job.client.substr(5);
   j["error"] = job.error.empty() ? nlohmann::json(nullptr)
                                  : nlohmann::json{{"code", job.error_code}, {"message", job.error}};
   j["links"] = {{"self", "/jobs/" + job.id},

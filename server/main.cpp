@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <sstream>
+#include <fstream>
 #include <pthread.h>
 #include <thread>
 #include <unistd.h>
@@ -26,6 +28,25 @@ std::string default_samples_dir(const char* argv0) {
   return {};
 }
 
+// `rayfarmd --make-tokens CLASS`: a roster line with a fresh token for each name of a class
+// list (one per line, # comments), on standard output, for --tokens-file.
+int make_tokens(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    std::fprintf(stderr, "rayfarmd: cannot read the class list %s\n", path.c_str());
+    return 1;
+  }
+  std::printf("# rayfarmd --tokens-file: NAME TOKEN [max_jobs=N]; give each student their line\n");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (const size_t hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    std::istringstream words(line);
+    std::string name;
+    if (words >> name) std::printf("%s %s\n", name.c_str(), rayfarm::server::new_token().c_str());
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -35,6 +56,7 @@ int main(int argc, char** argv) {
   sigemptyset(&signals);
   sigaddset(&signals, SIGTERM);
   sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGHUP);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
 
@@ -42,6 +64,7 @@ int main(int argc, char** argv) {
   auto settings = parse_settings(argc, argv, exit_code);
   if (!settings) return exit_code;
   if (settings->samples_dir.empty()) settings->samples_dir = default_samples_dir(argv[0]);
+  if (!settings->make_tokens.empty()) return make_tokens(settings->make_tokens);
 
   std::unique_ptr<Service> service;
   try {
@@ -67,9 +90,22 @@ int main(int argc, char** argv) {
                settings->host.c_str(), port, service->health()["workers"].get<int>(),
                settings->results_dir.empty() ? "in memory" : settings->results_dir.c_str());
 
+  const bool loopback = settings->host == "127.0.0.1" || settings->host == "localhost" ||
+                        settings->host == "::1";
+  if (!loopback && settings->tokens.empty() && settings->tokens_file.empty())
+    std::fprintf(stderr,
+                 "rayfarmd: warning: listening on %s with no tokens: every client behind one "
+                 "proxy is one client (one quota, anyone may cancel anyone's job); give each "
+                 "student a name with --tokens-file\n",
+                 settings->host.c_str());
+  if (!settings->tokens_file.empty())
+    std::fprintf(stderr, "rayfarmd: roster %s: %zu names\n", settings->tokens_file.c_str(),
+                 service->roster().size());
+
   std::thread signal_thread([&] {
     int sig = 0;
-    sigwait(&signals, &sig);
+    // SIGHUP rereads the roster; SIGTERM and SIGINT stop.
+    while (sigwait(&signals, &sig) == 0 && sig == SIGHUP) service->reload_roster();
     std::fprintf(stderr, "rayfarmd: %s: finishing running renders, then stopping\n",
                  sig == SIGTERM ? "SIGTERM" : "SIGINT");
     service->shutdown();

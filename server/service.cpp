@@ -2,6 +2,9 @@
 // the counted slots of long requests, health, metrics and shutdown.
 #include "service.h"
 
+#include <cstdio>
+#include <stdexcept>
+
 #include <algorithm>
 
 namespace rayfarm::server {
@@ -10,6 +13,14 @@ Service::Service(Settings settings)
     : settings_(std::move(settings)),
       store_(settings_.results_dir),
       cache_(settings_.cache_bytes) {
+  if (!settings_.tokens_file.empty()) {
+    std::vector<std::string> errors;
+    if (!roster_.load(settings_.tokens_file, &errors)) {
+      std::string all;
+      for (const std::string& e : errors) all += (all.empty() ? "" : "\n") + e;
+      throw std::runtime_error(all);
+    }
+  }
   int workers = settings_.workers > 0 ? settings_.workers
                                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   Scheduler::Hooks hooks;
@@ -135,6 +146,22 @@ void Service::shutdown() {
     { std::lock_guard jl(j->mu); }
     j->changed.notify_all();
   }
+}
+
+}  // namespace rayfarm::server
+
+namespace rayfarm::server {
+
+bool Service::reload_roster() {
+  if (settings_.tokens_file.empty()) return true;
+  std::vector<std::string> errors;
+  if (!roster_.load(settings_.tokens_file, &errors)) {
+    for (const std::string& e : errors) std::fprintf(stderr, "rayfarmd: %s\n", e.c_str());
+    std::fprintf(stderr, "rayfarmd: the roster is unchanged\n");
+    return false;
+  }
+  std::fprintf(stderr, "rayfarmd: roster reread: %zu names\n", roster_.size());
+  return true;
 }
 
 }  // namespace rayfarm::server

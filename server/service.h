@@ -22,6 +22,7 @@
 #include "image_cache.h"
 #include "job.h"
 #include "metrics.h"
+#include "roster.h"
 #include "scheduler.h"
 #include "settings.h"
 #include "store.h"
@@ -49,6 +50,9 @@ class Service {
   ~Service();
 
   const Settings& settings() const { return settings_; }
+  const Roster& roster() const { return roster_; }
+  // Rereads --tokens-file; on errors (printed) the roster stays as it was.
+  bool reload_roster();
 
   // Checks the scene and options against the format and the limits, answers from the cache
   // when it can, and otherwise queues the job; the job is on disk before this returns.
@@ -107,6 +111,7 @@ class Service {
   void load_samples();
 
   Settings settings_;
+  Roster roster_;
   ResultStore store_;
   ImageCache cache_;
   Metrics metrics_;

@@ -46,6 +46,10 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   add("--results-dir", s.results_dir, "directory for results and queued jobs (survive restarts)");
   add("--cache-bytes", s.cache_bytes, "result bytes kept in memory");
   add("--token", tokens, "bearer token(s) required of clients, comma-separated");
+  add("--tokens-file", s.tokens_file,
+      "the class roster: lines NAME TOKEN [max_jobs=N], # comments; reread on SIGHUP");
+  app.add_option("--make-tokens", s.make_tokens,
+                 "print a roster for a class list (one name per line) and exit");
   add("--default-profile", profile, "profile of a request whose query and scene name none")
       ->check(as_profile)
       ->type_name(std::string(find_option("profile")->value_help));

@@ -28,6 +28,8 @@ struct Settings {
   std::string results_dir;   // empty: keep results in memory only
   std::uint64_t cache_bytes = 256ULL << 20;
   std::vector<std::string> tokens;  // accepted bearer tokens; empty: no authentication
+  std::string tokens_file;  // the roster: NAME TOKEN [max_jobs=N] per line (roster.h)
+  std::string make_tokens;  // a class list to make a roster for (printed), then exit
   Profile default_profile = Profile::lecture;  // of a request whose query and scene name none
 
   // Beyond the spec's list, for a shared lab.

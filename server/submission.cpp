@@ -53,7 +53,8 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     // The pool holds exactly the unfinished jobs: counting there costs the client's own
     // jobs, not every job kept for reading back (thousands on a busy day).
     const auto mine = static_cast<long long>(scheduler_->jobs_of(client));
-    if (mine >= settings_.max_jobs_per_client) {
+    const int named_limit = roster_.max_jobs_of(client);  // a grader may have a larger quota
+    if (mine >= (named_limit > 0 ? named_limit : settings_.max_jobs_per_client)) {
       metrics_.rejected("client_limit");
       ApiError e = api_error(
           429, "too_many_jobs",

@@ -1351,6 +1351,68 @@ TEST(ServerRoutes, RepeatedOptionsAndUnknownCamerasAreNamed) {
   EXPECT_EQ(error_of(camera)["message"], "no camera named 'nope'; the scene's cameras: cam1");
 }
 
+// ---- The roster: named users -------------------------------------------------------------
+
+TEST(ServerRoster, NamesFromATokensFileOwnJobsAndHaveTheirOwnLimits) {
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / ("rayfarm-roster-" + std::to_string(::getpid()));
+  std::ofstream(file) << "# lab 3\nalice aaaaaaaaaaaaaaaaaaaaaaaa\nbob bbbbbbbbbbbbbbbbbbbbbbbb  # TA\n"
+                         "grader gggggggggggggggggggggggg max_jobs=3\n";
+  Settings s = test_settings();
+  s.tokens_file = file.string();
+  s.max_jobs_per_client = 1;
+  TestServer server(s);
+  auto alice = server.client("aaaaaaaaaaaaaaaaaaaaaaaa");
+  auto grader = server.client("gggggggggggggggggggggggg");
+  auto stranger = server.client("not-a-token-of-this-class");
+  // A header claiming a name is ignored: the token decides.
+  httplib::Headers claim = {{"X-Rayfarm-Client", "name:bob"}};
+  auto r = alice->Post(std::string("/render?") + kLong, claim, kScene, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  const std::string id = Json::parse(r->body)["id"];
+  EXPECT_EQ(json_of(alice->Get("/jobs/" + id))["owner"], "alice");
+  // Alice's limit is the server's (1); the grader's is its own (3).
+  auto second = alice->Post(std::string("/render?") + kLong, kScene, "text/plain");
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->status, 429);
+  std::vector<std::string> graders;
+  for (int i = 0; i < 3; ++i) {
+    auto g = grader->Post(std::string("/render?") + kLong, kScene, "text/plain");
+    ASSERT_TRUE(g);
+    EXPECT_EQ(g->status, 202) << i;
+    if (g->status == 202) graders.push_back(Json::parse(g->body)["id"]);
+  }
+  EXPECT_EQ(code_of(grader->Post(std::string("/render?") + kLong, kScene, "text/plain")), 429);
+  // Only the owner cancels; a token not on the roster is refused.
+  EXPECT_EQ(code_of(grader->Delete("/jobs/" + id)), 403);
+  EXPECT_EQ(code_of(stranger->Get("/jobs")), 401);
+  EXPECT_EQ(code_of(alice->Delete("/jobs/" + id)), 200);
+  for (const std::string& g : graders) grader->Delete("/jobs/" + g);
+
+  // A roster with errors is refused as a whole, and a reread keeps the one it had.
+  std::ofstream(file, std::ios::app) << "carol short\n";
+  EXPECT_FALSE(server.service().reload_roster());
+  EXPECT_EQ(server.service().roster().size(), 3u);
+  std::ofstream(file) << "carol cccccccccccccccccccccccc\n";
+  EXPECT_TRUE(server.service().reload_roster());
+  EXPECT_EQ(code_of(alice->Get("/jobs")), 401);
+  EXPECT_EQ(code_of(server.client("cccccccccccccccccccccccc")->Get("/jobs")), 200);
+  std::filesystem::remove(file);
+}
+
+TEST(ServerRoster, ParseErrorsArePlaced) {
+  std::vector<std::string> errors;
+  EXPECT_FALSE(Roster::parse("ann 0123456789abcdef0123\nann 0123456789abcdef0124\nbo\n"
+                             "cy 0123456789abcdef0125 max_jobs=0 colour=red\n",
+                             "class.txt", &errors));
+  ASSERT_EQ(errors.size(), 4u);
+  EXPECT_EQ(errors[0], "class.txt:2: 'ann' is listed twice");
+  EXPECT_EQ(errors[1], "class.txt:3: 'bo' has no token: write NAME TOKEN");
+  EXPECT_EQ(errors[2], "class.txt:4: max_jobs must be a whole number of at least 1, got '0'");
+  EXPECT_EQ(errors[3], "class.txt:4: unknown field 'colour=red' (NAME TOKEN [max_jobs=N])");
+}
+
 // ---- POST /grade -------------------------------------------------------------------------
 
 constexpr const char* kAssignment = R"({"name": "Lab", "profile": "cpsc102", "tests": [
