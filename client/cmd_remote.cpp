@@ -229,11 +229,12 @@ Runner add_cancel(CLI::App& app) {
 
 Runner add_wait(CLI::App& app) {
   auto args = add_id_args(app);
-  app.add_option("-o,--output", args->out, "save the image here when done (- for stdout)");
+  app.add_option("-o,--output", args->out, "save the image here when done (- for stdout; default ID.png)");
   app.add_flag("-q,--quiet", args->quiet, "no progress");
   return [args]() -> int {
     auto remote = remote_for(*args);
     if (!remote) return kUsage;
+    if (args->out.empty()) args->out = args->id + ".png";  // waiting for nothing helps nobody
     int code = kOk;
     auto status = follow(*remote, args->id, args->quiet, code, false);
     if (!status) return code;

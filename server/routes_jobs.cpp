@@ -72,6 +72,11 @@ void delete_job(Service& svc, const Request& req, Response& res) {
   ApiError e = svc.cancel(req.matches[1], client_of(req));
   if (e) return send_error(res, e);
   auto job = svc.find(req.matches[1]);
+  {
+    // A running job stops within a tile: answer with its state after the cancel, not before.
+    std::unique_lock lock(job->mu);
+    job->changed.wait_for(lock, std::chrono::seconds(2), [&] { return is_final(job->state); });
+  }
   send_json(res, 200, svc.status(*job));
 }
 
