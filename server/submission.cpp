@@ -1,5 +1,6 @@
 // Accepting a job: the per-client and queue limits, the scene and its options checked, the
 // render limits, the content-addressed cache, and the job on disk before it is queued.
+#include <cmath>
 #include <cstdint>
 #include <random>
 
@@ -10,6 +11,20 @@
 #include "service.h"
 
 namespace rayfarm::server {
+namespace {
+
+// 31948800000 as "31,948,800,000".
+std::string grouped(double v) {
+  std::string digits = std::to_string(static_cast<long long>(std::llround(v)));
+  std::string out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+}  // namespace
 
 std::string random_id() {
   static thread_local std::random_device device;
@@ -183,9 +198,16 @@ ApiError Service::check_limits(const Scene& scene, const RenderOptions& o, int w
     return limit_error("max_objects", "the scene has " + std::to_string(objects) +
                                           " objects; the limit is " + std::to_string(s.max_objects));
   double work = static_cast<double>(pixels) * o.spp * (depth + 1);
-  if (work > s.max_work)
-    return limit_error("max_work", "pixels x spp x (max_depth + 1) is " + format_number(work) +
-                                       "; the limit is " + format_number(s.max_work));
+  if (work > s.max_work) {
+    // What would fit: the most spp at this size and depth.
+    const double fits = std::floor(s.max_work / (static_cast<double>(pixels) * (depth + 1)));
+    return limit_error(
+        "max_work", "the job asks for " + grouped(work) + " ray paths (" + std::to_string(pixels) +
+                        " pixels x spp " + std::to_string(o.spp) + " x (max_depth " +
+                        std::to_string(depth) + " + 1)); the limit is " + grouped(s.max_work) +
+                        (fits >= 1 ? ": lower spp to " + grouped(fits) + " or less, or the size"
+                                   : ": lower the size or max_depth"));
+  }
   if (scene.lights.size() > static_cast<size_t>(s.max_lights))
     return limit_error("max_lights", "the scene has " + std::to_string(scene.lights.size()) +
                                          " lights; the limit is " + std::to_string(s.max_lights));

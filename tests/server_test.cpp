@@ -1354,6 +1354,16 @@ TEST(ServerRoutes, RepeatedOptionsAndUnknownCamerasAreNamed) {
   EXPECT_EQ(error_of(camera)["message"], "no camera named 'nope'; the scene's cameras: cam1");
 }
 
+TEST(ServerRoutes, TheWorkLimitSaysWhatWouldFit) {
+  TestServer server;
+  auto r = server.client()->Post("/render?spp=1000&width=4000&height=4000", kScene, "text/plain");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 422);
+  EXPECT_EQ(error_of(r)["message"],
+            "the job asks for 144,000,000,000 ray paths (16000000 pixels x spp 1000 x (max_depth 8 "
+            "+ 1)); the limit is 8,000,000,000: lower spp to 55 or less, or the size");
+}
+
 // ---- The roster: named users -------------------------------------------------------------
 
 TEST(ServerRoster, NamesFromATokensFileOwnJobsAndHaveTheirOwnLimits) {
