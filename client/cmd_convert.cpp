@@ -1,4 +1,5 @@
 // `rayfarm convert SCENE --to json|model|pov [-o OUT]`.
+#include <algorithm>
 #include <iostream>
 
 #include "cli_common.h"
@@ -31,8 +32,21 @@ Runner add_convert(CLI::App& app) {
     if (!loaded) return int(kInputError);
     std::string out;
     if (args->to == "json") {
+      // Render options given here go into the scene's "render" object, over its own.
+      for (const OptionValue& flag : args->flags.as_set()) {
+        auto& render = loaded->desc.render;
+        render.erase(std::remove_if(render.begin(), render.end(),
+                                    [&](const OptionValue& o) { return o.name == flag.name; }),
+                     render.end());
+        render.push_back(flag);
+      }
       out = write_json(loaded->desc);
     } else if (args->to == "model") {
+      if (!args->flags.values.empty()) {
+        std::cerr << "rayfarm: the model format has no render options: give --"
+                  << args->flags.values.begin()->first << " when rendering, or convert --to json\n";
+        return int(kUsage);
+      }
       out = write_model(loaded->desc);
       if (!loaded->desc.render.empty())
         std::cerr << "rayfarm: note: the model format has no render options; the scene's "

@@ -172,6 +172,16 @@ TEST(CompareCli, ExitsAsDiffDoes) {
   EXPECT_EQ(j["match"], true);
 }
 
+TEST(ConvertCli, RenderFlagsGoIntoJsonAndAreRefusedForModelFiles) {
+  const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
+  Outcome json = run(kRayfarm + " convert " + scene + " --to json --spp 8 --profile cpsc102");
+  ASSERT_EQ(json.code, 0);
+  Json j = Json::parse(json.out);
+  EXPECT_EQ(j["render"]["spp"], 8);
+  EXPECT_EQ(j["render"]["profile"], "cpsc102");
+  EXPECT_EQ(run(kRayfarm + " convert " + scene + " --to model --spp 8").code, 2);
+}
+
 TEST(RenderCli, RefusesOutputsAndServersItCannotUse) {
   const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
   const std::string out = q((fs::temp_directory_path() / "rayfarm-cli-out").string());
