@@ -191,8 +191,15 @@ void post_grade(Service& svc, const Request& req, Response& res) {
                       "assignment=NAME for one stored on the server)");
   std::string text;
   std::unique_ptr<Files> files;
+  // An uploaded assignment is a file part, or a field holding JSON (curl -F 'assignment=<x');
+  // a field holding a plain name names a stored one.
   const auto uploaded = req.files.find("assignment");
-  if (uploaded != req.files.end() && !uploaded->second.filename.empty()) {
+  const auto is_json = [](const std::string& v) {
+    const size_t first = v.find_first_not_of(" \t\r\n");
+    return first != std::string::npos && v[first] == '{';
+  };
+  if (uploaded != req.files.end() &&
+      (!uploaded->second.filename.empty() || is_json(uploaded->second.content))) {
     text = uploaded->second.content;
     files = std::make_unique<PartFiles>(req);
   } else if (auto named = fields.find("assignment"); named != fields.end()) {

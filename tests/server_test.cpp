@@ -1453,7 +1453,8 @@ TEST(ServerGrade, AnUploadedAssignmentIsGradedInThePlatformsFormat) {
   EXPECT_EQ(j["score"], 2);
   EXPECT_EQ(j["tests"][0]["status"], "passed");
   EXPECT_EQ(j["tests"][1]["extra_data"]["hints"][0]["code"], "rounding");
-  // The same from a form field, in JUnit.
+  // The assignment as a field (curl -F 'assignment=<lab.json'), the format from a field.
+  items[0].filename = "";
   items.push_back({"format", "junit", "", ""});
   auto x = c->Post("/grade", items);
   ASSERT_TRUE(x);
