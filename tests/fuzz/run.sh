@@ -7,6 +7,7 @@ set -euo pipefail
 seconds=${1:-60}
 build=build-fuzz
 CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
   -DRAYFARM_FUZZ=ON -DRAYFARM_BUILD_TESTS=OFF \
   -DRAYFARM_SANITIZE=fuzzer-no-link,address,undefined >/dev/null
 cmake --build "$build" -j2 --target fuzz_model_parser fuzz_json_scene fuzz_image_decode fuzz_http_request
