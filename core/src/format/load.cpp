@@ -19,7 +19,8 @@ SceneFormat detect_format(std::string_view text) {
 namespace {
 
 // What a file that is not a scene at all is, so that it is named rather than parsed into a
-// page of errors (and its bytes never echoed to a terminal).
+// page of errors (and its bytes never echoed to a terminal). Only signatures that no scene
+// can begin with: the loader must refuse exactly what the parser refuses.
 std::string not_a_scene(std::string_view text) {
   if (text.starts_with("\x89PNG")) return "this is a PNG image, not a scene";
   if (text.starts_with("\xFF\xD8\xFF")) return "this is a JPEG image, not a scene";
@@ -29,8 +30,6 @@ std::string not_a_scene(std::string_view text) {
     return "this is a PPM image, not a scene";
   if (text.starts_with("PK\x03\x04")) return "this is a zip archive, not a scene";
   if (text.starts_with("\x1F\x8B")) return "this is gzip-compressed, not a scene";
-  if (text.substr(0, 4096).find('\0') != std::string_view::npos)
-    return "this is binary data, not a scene (it has NUL bytes)";
   return "";
 }
 
