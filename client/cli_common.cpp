@@ -125,13 +125,6 @@ FileResolver FileResolver::beside(const std::string& scene_path) {
                                         : std::filesystem::path(scene_path).parent_path());
 }
 
-std::optional<std::string> RecordingResolver::read(const std::string& path,
-                                                   std::string& error) const {
-  auto bytes = inner_.read(path, error);
-  if (bytes) files_[path] = *bytes;
-  return bytes;
-}
-
 std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,
                                         bool print_warnings, LoadDetail detail, bool textures) {
   const FileResolver files = FileResolver::beside(path);

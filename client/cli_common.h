@@ -44,19 +44,6 @@ class FileResolver final : public ResourceResolver {
   std::filesystem::path base_;
 };
 
-// Reads through another resolver and keeps each file it read, by the path the scene writes:
-// what `render --server` uploads with the scene, read exactly as a local render reads it.
-class RecordingResolver final : public ResourceResolver {
- public:
-  explicit RecordingResolver(const ResourceResolver& inner) : inner_(inner) {}
-  std::optional<std::string> read(const std::string& path, std::string& error) const override;
-  const std::map<std::string, std::string>& files() const { return files_; }
-
- private:
-  const ResourceResolver& inner_;
-  mutable std::map<std::string, std::string> files_;
-};
-
 // Loads and checks a scene file, printing diagnostics. nullopt when it has errors. With
 // `textures`, the scene's texture files are read too (their problems are errors).
 std::optional<LoadedScene> load_checked(const std::string& path, const std::string& text,

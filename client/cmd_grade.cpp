@@ -162,7 +162,6 @@ class LocalBackend final : public Backend {
   }
 
   std::optional<SceneFiles> scene(const std::string& path, std::string* error) override {
-    if (auto it = scenes_.find(path); it != scenes_.end()) return it->second;
     const fs::path file = base_ / path;
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) {
@@ -174,17 +173,7 @@ class LocalBackend final : public Backend {
       *error = "cannot read scene '" + file.string() + "'";
       return std::nullopt;
     }
-    const FileResolver files = FileResolver::beside(file.string());
-    const RecordingResolver recording(files);
-    auto loaded = std::make_shared<LoadedScene>(load_scene(*text, LoadDetail::full, &recording));
-    if (loaded->diags.has_errors() || !loaded->scene) {
-      *error = format_diagnostics(loaded->diags, file.string(), *text);
-      while (!error->empty() && error->back() == '\n') error->pop_back();
-      return std::nullopt;
-    }
-    SceneFiles s{path, *text, recording.files(), loaded};
-    scenes_.emplace(path, s);
-    return s;
+    return load_scene_files(path, *text, FileResolver::beside(file.string()), file.string(), error);
   }
 
   std::optional<Image> render(const SceneFiles& scene, const RenderOptions& options,
@@ -258,7 +247,6 @@ class LocalBackend final : public Backend {
     command = replace_all(command, "{out}", shell_quote(out.string()));
     command = replace_all(command, "{name}", shell_quote(test.name));
     RunOutcome r = run_limited(command, !to_file, args_.timeout, args_.memory_mb);
-    s.seconds = r.seconds;
     s.log_tail = r.log.size() > kLogTail ? r.log.substr(r.log.size() - kLogTail) : r.log;
     if (!r.started) {
       s.error = "your program could not be started";
@@ -301,7 +289,6 @@ class LocalBackend final : public Backend {
   const GradeArgs& args_;
   fs::path base_;
   fs::path cache_;
-  std::map<std::string, SceneFiles> scenes_;
 };
 
 fs::path lock_path(const GradeArgs& args) {

@@ -75,17 +75,12 @@ class SceneTextures final : public ResourceResolver {
  public:
   SceneTextures(const Files& files, std::string folder) : files_(files), folder_(std::move(folder)) {}
   std::optional<std::string> read(const std::string& path, std::string& error) const override {
-    const std::string full = folder_.empty() ? path : folder_ + "/" + path;
-    auto bytes = files_.read(full, error);
-    if (bytes) read_[path] = *bytes;
-    return bytes;
+    return files_.read(folder_.empty() ? path : folder_ + "/" + path, error);
   }
-  const TextureFiles& files() const { return read_; }
 
  private:
   const Files& files_;
   std::string folder_;
-  mutable TextureFiles read_;
 };
 
 class ServerBackend final : public Backend {
@@ -94,7 +89,6 @@ class ServerBackend final : public Backend {
       : svc_(svc), req_(req), scenes_(scenes), client_(client_of(req)) {}
 
   std::optional<SceneFiles> scene(const std::string& path, std::string* error) override {
-    if (auto it = cache_.find(path); it != cache_.end()) return it->second;
     std::string why;
     auto text = scenes_.read(path, why);
     if (!text) {
@@ -102,16 +96,8 @@ class ServerBackend final : public Backend {
       return std::nullopt;
     }
     const size_t slash = path.find_last_of('/');
-    SceneTextures textures(scenes_, slash == std::string::npos ? "" : path.substr(0, slash));
-    auto loaded = std::make_shared<LoadedScene>(load_scene(*text, LoadDetail::full, &textures));
-    if (loaded->diags.has_errors() || !loaded->scene) {
-      *error = format_diagnostics(loaded->diags, path, *text);
-      while (!error->empty() && error->back() == '\n') error->pop_back();
-      return std::nullopt;
-    }
-    SceneFiles s{path, *text, textures.files(), loaded};
-    cache_.emplace(path, s);
-    return s;
+    const SceneTextures textures(scenes_, slash == std::string::npos ? "" : path.substr(0, slash));
+    return load_scene_files(path, *text, textures, path, error);
   }
 
   std::optional<Image> render(const SceneFiles& scene, const RenderOptions& options,
@@ -143,7 +129,6 @@ class ServerBackend final : public Backend {
   const Request& req_;
   const Files& scenes_;
   std::string client_;
-  std::map<std::string, SceneFiles> cache_;
 };
 
 const char* content_type(Format f) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <map>
 #include <regex>
 
@@ -412,7 +413,21 @@ TEST(Formats, PrairieLearnResults) {
   EXPECT_EQ(j["tests"][1]["images"][2]["label"], "Difference");
   const std::string url = j["tests"][1]["images"][0]["url"];
   EXPECT_EQ(url.substr(0, 22), "data:image/png;base64,");
-  // The data URL decodes to the reference itself.
+  // The data URL decodes to the reference itself (small images are not shrunk).
+  std::string png;
+  unsigned bits = 0;
+  int n = 0;
+  for (char ch : url.substr(22)) {
+    const char* alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const char* at = std::strchr(alphabet, ch);
+    if (ch == '=' || !at) break;
+    bits = (bits << 6) | static_cast<unsigned>(at - alphabet);
+    if ((n += 6) >= 8) png += static_cast<char>((bits >> (n -= 8)) & 0xFF);
+  }
+  std::string error;
+  auto decoded = decode_image(png, &error);
+  ASSERT_TRUE(decoded) << error;
+  EXPECT_EQ(*decoded, render_with(kScene, {{"profile", "cpsc102"}}));
   EXPECT_EQ(j["tests"][1]["points"], 0);
   EXPECT_EQ(j["tests"][1]["max_points"], 3);
 

@@ -69,18 +69,24 @@ struct StudentImage {
   std::string error;     // missing or unreadable: what and where
   std::string note;      // e.g. another file name used, or the program's exit status
   std::string log_tail;  // a program's output (--run), last part
-  double seconds = 0;    // a program's run time
 };
 
 // Where grading gets its files and renders: the command line reads the disk and renders
 // here; the server reads the request's parts and renders through its queue.
+// A scene's text loaded and checked, its textures read through `textures` and kept by the
+// path the scene writes. nullopt with the diagnostics (as `file_name:line:col: ...`) in `error`.
+std::optional<SceneFiles> load_scene_files(const std::string& path, const std::string& text,
+                                           const ResourceResolver& textures,
+                                           const std::string& file_name, std::string* error);
+
 // The content key of a test's reference (the scene must be loaded with LoadDetail::full).
 std::string reference_key(const SceneFiles& scene, const RenderOptions& options);
 
 class Backend {
  public:
   virtual ~Backend() = default;
-  // The scene of a test, read (with its textures) and checked. nullopt with `error`.
+  // The scene of a test, read (with its textures) and checked, e.g. by load_scene_files.
+  // nullopt with `error`. grade() asks once per path.
   virtual std::optional<SceneFiles> scene(const std::string& path, std::string* error) = 0;
   virtual std::optional<Image> render(const SceneFiles& scene, const RenderOptions& options,
                                       std::string* error) = 0;
@@ -110,7 +116,6 @@ struct TestResult {
   std::string reference_sha256;  // of its pixels (width, height, bytes)
   std::string student_note, log_tail;
   bool student_missing = false;  // no readable image
-  double seconds = 0;
 };
 
 struct GradeResult {
@@ -119,7 +124,6 @@ struct GradeResult {
   double score = 0;
   double max_score = 0;
   std::string error;  // the grader itself failed (e.g. the lock does not match): score 0
-  double seconds = 0;
 
   double fraction() const { return max_score > 0 ? score / max_score : 0; }
 };

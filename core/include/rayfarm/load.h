@@ -1,7 +1,9 @@
 // One call from scene text to a checked scene: format detection, parsing, building.
 #pragma once
 
+#include <map>
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "rayfarm/diagnostic.h"
@@ -23,6 +25,19 @@ struct LoadedScene {
   SceneDesc desc;  // empty when LoadDetail::scene took the fast path
   std::optional<Scene> scene;  // set when there were no errors
   Diagnostics diags;
+};
+
+// Reads through another resolver and keeps each file it read, by the path the scene writes:
+// what a scene sent elsewhere (to a server, into a content key) must carry with it.
+class RecordingResolver final : public ResourceResolver {
+ public:
+  explicit RecordingResolver(const ResourceResolver& inner) : inner_(inner) {}
+  std::optional<std::string> read(const std::string& path, std::string& error) const override;
+  const std::map<std::string, std::string>& files() const { return files_; }
+
+ private:
+  const ResourceResolver& inner_;
+  mutable std::map<std::string, std::string> files_;
 };
 
 // With a resolver, the scene's textures are read and decoded too (their errors are scene

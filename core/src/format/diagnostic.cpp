@@ -25,23 +25,24 @@ size_t utf8_length(std::string_view s, size_t i) {
   return n;
 }
 
-// Messages quote the input: keep each one short printable line of valid UTF-8 whatever was
-// sent, so it cannot break a terminal, a log line or a JSON error body.
-std::string clean(std::string message) {
-  constexpr size_t kMaxLength = 1000;
+// Text as it may be shown on a terminal or in a log: control bytes (an escape sequence in a
+// hostile file) and bytes that are not valid UTF-8 become '?', one for one (so a caret under a
+// source line still lines up); tabs stay where asked. At most `max_length` bytes, then "...".
+std::string printable(std::string_view text, bool keep_tabs, size_t max_length) {
   std::string out;
-  out.reserve(std::min(message.size(), kMaxLength));
-  for (size_t i = 0; i < message.size();) {
-    if (out.size() >= kMaxLength - 7) {
+  out.reserve(std::min(text.size(), max_length));
+  for (size_t i = 0; i < text.size();) {
+    if (out.size() >= max_length - 7) {
       out += "...";
       break;
     }
-    auto c = static_cast<unsigned char>(message[i]);
+    auto c = static_cast<unsigned char>(text[i]);
     if (c < 0x80) {
-      out += c < 0x20 || c == 0x7f ? '?' : static_cast<char>(c);
+      const bool control = (c < 0x20 && !(keep_tabs && c == '\t')) || c == 0x7f;
+      out += control ? '?' : static_cast<char>(c);
       ++i;
-    } else if (size_t n = utf8_length(message, i)) {
-      out.append(message, i, n);
+    } else if (size_t n = utf8_length(text, i)) {
+      out.append(text, i, n);
       i += n;
     } else {
       out += '?';
@@ -50,6 +51,10 @@ std::string clean(std::string message) {
   }
   return out;
 }
+
+// Messages quote the input: keep each one short printable line of valid UTF-8 whatever was
+// sent, so it cannot break a terminal, a log line or a JSON error body.
+std::string clean(const std::string& message) { return printable(message, false, 1000); }
 
 }  // namespace
 
@@ -97,38 +102,6 @@ std::string_view source_line(std::string_view source, int line) {
 
 }  // namespace
 
-namespace {
-
-// A source line as it may be shown on a terminal: control bytes (an escape sequence in a
-// hostile file) and bytes that are not UTF-8 become '?', one for one, so the caret still
-// lines up.
-std::string printable(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (size_t i = 0; i < text.size();) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    if (c < 0x80) {
-      out += (c < 0x20 && c != '\t') || c == 0x7F ? '?' : static_cast<char>(c);
-      ++i;
-      continue;
-    }
-    const size_t len = c >= 0xF0 && c <= 0xF4 ? 4 : c >= 0xE0 ? 3 : c >= 0xC2 && c < 0xE0 ? 2 : 0;
-    bool valid = len > 0 && i + len <= text.size();
-    for (size_t k = 1; valid && k < len; ++k)
-      valid = (static_cast<unsigned char>(text[i + k]) & 0xC0) == 0x80;
-    if (valid) {
-      out.append(text.substr(i, len));
-      i += len;
-    } else {
-      out += '?';
-      ++i;
-    }
-  }
-  return out;
-}
-
-}  // namespace
-
 std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
                               std::string_view source) {
   std::ostringstream out;
@@ -141,7 +114,7 @@ std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
   if (d.where.line > 0) {
     std::string_view text = source_line(source, d.where.line);
     if (!text.empty() && text.size() <= 400) {
-      out << "  " << printable(text) << "\n  ";
+      out << "  " << printable(text, true, std::string_view::npos) << "\n  ";
       // Keep tabs so the caret lines up under the offending column.
       for (int i = 1; i < d.where.column && i <= static_cast<int>(text.size()); ++i)
         out << (text[i - 1] == '\t' ? '\t' : ' ');

@@ -35,6 +35,13 @@ std::string not_a_scene(std::string_view text) {
 
 }  // namespace
 
+std::optional<std::string> RecordingResolver::read(const std::string& path,
+                                                   std::string& error) const {
+  auto bytes = inner_.read(path, error);
+  if (bytes) files_[path] = *bytes;
+  return bytes;
+}
+
 LoadedScene load_scene(std::string_view text, LoadDetail detail,
                        const ResourceResolver* resolver) {
   LoadedScene out;

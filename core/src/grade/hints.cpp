@@ -7,7 +7,9 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
-#include <map>
+#include <functional>
+#include <limits>
+#include <string_view>
 
 #include "rayfarm/explain.h"
 #include "rayfarm/grade.h"
