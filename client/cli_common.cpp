@@ -71,13 +71,47 @@ bool write_output(const std::string& path, const void* data, size_t size) {
   return true;
 }
 
-void OptionFlags::add_to(CLI::App& app) {
+std::string check_output(const std::string& out, const std::string& format) {
+  if (out == "-") {
+    if (isatty(STDOUT_FILENO))
+      return "not writing image bytes to a terminal: redirect standard output (> out.png) or "
+             "give -o FILE";
+    return "";
+  }
+  std::string ext = std::filesystem::path(out).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext.empty()) return "";
+  if (ext != ".png" && ext != ".ppm")
+    return "'" + out + "': rayfarm writes PNG or PPM images; name the file .png or .ppm";
+  if (!format.empty() && "." + format != ext)
+    return "'" + out + "' says " + ext.substr(1) + " but --format is " + format;
+  return "";
+}
+
+void OptionFlags::add_to(CLI::App& app, const std::map<std::string, std::string>& refused) {
+  const RenderOptions defaults;
   for (const OptionSpec& spec : option_specs()) {
     std::string name(spec.name);
     std::string dashed = name;
     for (char& c : dashed)
       if (c == '_') c = '-';
     std::string flags = "--" + dashed + (dashed != name ? ",--" + name : "");
+    if (auto why = refused.find(name); why != refused.end()) {
+      // Not in the help; said when given, rather than silently ignored.
+      app.add_option_function<std::string>(flags,
+                                           [dashed, why = why->second](const std::string&) {
+                                             throw CLI::ValidationError("--" + dashed, why);
+                                           })
+          ->group("");
+      continue;
+    }
+    std::string help(spec.help);
+    if (help.find("default") == std::string::npos) {
+      std::string value = spec.print(defaults);
+      if (name == "format") value = "by the output's extension, else png";
+      if (name == "target_error" || name == "time_limit") value += " = off";
+      help += " (default: " + value + ")";
+    }
     app.add_option_function<std::string>(
            flags,
            [this, name, dashed](const std::string& v) {
@@ -87,8 +121,9 @@ void OptionFlags::add_to(CLI::App& app) {
                throw CLI::ValidationError("--" + dashed, *bad);
              values[name] = v;
            },
-           std::string(spec.help))
-        ->type_name(std::string(spec.value_help));
+           help)
+        ->type_name(std::string(spec.value_help))
+        ->group("Render options");
   }
 }
 

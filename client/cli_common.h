@@ -13,10 +13,30 @@
 
 namespace rayfarm::cli {
 
-// SPEC §6.
-enum Exit { kOk = 0, kInputError = 1, kUsage = 2, kServerError = 3 };
-// `compare` exits as diff does: 1 for images that differ, 2 for trouble.
-constexpr int kDiffer = 1;
+// The exit codes of docs/cli.md, one table for every command, as diff and grep exit: 1 is
+// an answer, "no" (check found errors, the images differ, the score is too low, the server's
+// job failed); 2 is trouble the user must fix (usage, unreadable files, a scene with errors
+// for render, a request the server refused); 3 is the server's or the network's trouble.
+enum Exit { kOk = 0, kNo = 1, kBadInput = 2, kServerError = 3, kInterrupted = 130 };
+
+// The help's footer: examples, then the exit codes with what 1 means for this command
+// (empty: it never answers 1); `server` for the commands that talk to rayfarmd.
+std::string help_footer(const std::string& examples, const std::string& exit_one,
+                        bool server = false);
+
+// Range checks whose message names the option and the accepted range, as the render
+// options' own do: "--threads: must be an integer in 0..1024, got '2000'".
+CLI::Option* int_range(CLI::Option* option, long long lo, long long hi);
+CLI::Option* number_range(CLI::Option* option, double lo, double hi);
+
+// A command-line error in plain words: "--width given twice", "unknown option --frobnicate
+// (did you mean --format?)", "unknown command 'rendr' (did you mean 'render'?)".
+std::string usage_message(const CLI::App& app, const CLI::ParseError& e);
+
+// An output the user would not expect is refused before any work: a name whose extension
+// says another format, or image bytes sent to a terminal. Empty when the output is fine;
+// `format` is --format's value, empty when not given.
+std::string check_output(const std::string& out, const std::string& format);
 
 // Reads a file, or standard input for "-". nullopt with a message on stderr on failure.
 std::optional<std::string> read_input(const std::string& path);
@@ -27,7 +47,8 @@ bool write_output(const std::string& path, const void* data, size_t size);
 // Values are kept as text, in the order of the table, to be applied after the scene's own.
 struct OptionFlags {
   std::map<std::string, std::string> values;
-  void add_to(CLI::App& app);
+  // `refused`: options this command cannot use (name -> why), refused rather than ignored.
+  void add_to(CLI::App& app, const std::map<std::string, std::string>& refused = {});
   OptionSet as_set() const;
 };
 

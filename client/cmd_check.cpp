@@ -1,12 +1,82 @@
 // `rayfarm check [--course] SCENE...`: errors and lint warnings for each file; with --course
 // also where the course's reference program would stop on or misread it.
+#include <algorithm>
 #include <iostream>
+#include <utility>
 
 #include "cli_common.h"
 #include "commands.h"
 #include "rayfarm/lint.h"
 
 namespace rayfarm::cli {
+
+namespace {
+
+std::string counted(size_t n, const char* what) {
+  return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+}
+
+struct Tally {
+  size_t errors = 0;
+  size_t warnings = 0;
+};
+
+// One file: every error and warning in line order (the loader's, the linter's and the
+// course's come from separate passes), then one line that says how it went.
+int check_file(const std::string& path, bool quiet, bool course, Tally& total) {
+  auto text = read_input(path);
+  if (!text) return kBadInput;
+  const std::string name = display_name(path);
+  const FileResolver files = FileResolver::beside(path);
+  LoadedScene loaded = load_scene(*text, LoadDetail::scene, &files);
+  std::vector<Diagnostic> all = loaded.diags.items();
+  if (loaded.scene && !loaded.diags.has_errors()) {
+    RenderOptions options;
+    Diagnostics scratch, lints;
+    apply_options(options, loaded.scene->render, scratch);
+    lint_scene(*loaded.scene, options, lints);
+    all.insert(all.end(), lints.items().begin(), lints.items().end());
+  }
+  // Course warnings also for files rayfarm rejects: the student wants every problem.
+  if (course) {
+    if (detect_format(*text) == SceneFormat::model) {
+      Diagnostics course_lints;
+      lint_course(*text, course_lints);
+      all.insert(all.end(), course_lints.items().begin(), course_lints.items().end());
+    } else {
+      std::cerr << name << ": note: --course applies to model files only\n";
+    }
+  }
+  std::stable_sort(all.begin(), all.end(), [](const Diagnostic& a, const Diagnostic& b) {
+    return std::pair(a.where.line, a.where.column) < std::pair(b.where.line, b.where.column);
+  });
+  size_t warnings = 0;
+  for (const Diagnostic& d : all) {
+    std::cerr << format_diagnostic(d, name, *text);
+    warnings += d.severity == Severity::warning;
+  }
+  const size_t errors = loaded.diags.error_count();
+  total.errors += errors;
+  total.warnings += warnings;
+  if (errors > 0) {
+    std::cout << name << ": " << counted(errors, "error") << ", " << counted(warnings, "warning")
+              << (loaded.diags.truncated()
+                      ? " (only the first " + std::to_string(Diagnostics::kMaxErrors) + " shown)"
+                      : "")
+              << "\n";
+    return kNo;
+  }
+  if (!quiet || warnings > 0) {
+    const Scene& s = *loaded.scene;
+    std::cout << name << ": ok: " << s.cameras.size() << " camera(s), " << s.materials.size()
+              << " material(s), " << s.lights.size() << " light(s), " << s.objects.size()
+              << " object(s)"
+              << (warnings > 0 ? ", " + std::to_string(warnings) + " warning(s)" : "") << "\n";
+  }
+  return kOk;
+}
+
+}  // namespace
 
 Runner add_check(CLI::App& app) {
   auto files = std::make_shared<std::vector<std::string>>();
@@ -17,48 +87,19 @@ Runner add_check(CLI::App& app) {
   app.add_flag("--course", *course,
                "also warn where the course's reference program (CPSC 102, 2014-18) would stop "
                "on or misread a model file");
+  app.footer(help_footer(
+      "  rayfarm check scenes/cho.txt\n"
+      "  rayfarm check -q scenes/*.txt       # only the files with something to say\n"
+      "  rayfarm check --course student.txt  # ... and where the course's program would stop\n",
+      "a scene has errors (warnings alone do not change the exit code)"));
   return [files, quiet, course] {
     int status = kOk;
-    for (const std::string& path : *files) {
-      auto text = read_input(path);
-      if (!text) {
-        status = kInputError;
-        continue;
-      }
-      auto loaded = load_checked(path, *text, true);
-      // Course warnings also for files rayfarm rejects: the student wants every problem.
-      Diagnostics course_lints;
-      if (*course) {
-        if (detect_format(*text) == SceneFormat::model)
-          lint_course(*text, course_lints);
-        else
-          std::cerr << display_name(path) << ": note: --course applies to model files only\n";
-      }
-      if (!loaded) {
-        for (const Diagnostic& d : course_lints.items())
-          std::cerr << format_diagnostic(d, display_name(path), *text);
-        status = kInputError;
-        continue;
-      }
-      RenderOptions options;
-      Diagnostics scratch, lints;
-      apply_options(options, loaded->scene->render, scratch);
-      lint_scene(*loaded->scene, options, lints);
-      for (const Diagnostic& d : loaded->diags.items())  // build-stage warnings, if any
-        if (d.severity == Severity::warning) lints.warning(d.code, d.message, d.where);
-      for (const Diagnostic& d : course_lints.items()) lints.warning(d.code, d.message, d.where);
-      for (const Diagnostic& d : lints.items())
-        std::cerr << format_diagnostic(d, display_name(path), *text);
-      if (!*quiet || !lints.items().empty()) {
-        const Scene& s = *loaded->scene;
-        std::cout << display_name(path) << ": ok: " << s.cameras.size() << " camera(s), "
-                  << s.materials.size() << " material(s), " << s.lights.size() << " light(s), "
-                  << s.objects.size() << " object(s)"
-                  << (lints.items().empty() ? "" : ", " + std::to_string(lints.items().size()) +
-                                                       " warning(s)")
-                  << "\n";
-      }
-    }
+    Tally total;
+    for (const std::string& path : *files)
+      status = std::max(status, check_file(path, *quiet, *course, total));
+    if (files->size() > 1 && (total.errors > 0 || total.warnings > 0))
+      std::cout << counted(files->size(), "file") << ": " << counted(total.errors, "error") << ", "
+                << counted(total.warnings, "warning") << "\n";
     return status;
   };
 }

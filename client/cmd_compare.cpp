@@ -28,26 +28,36 @@ Runner add_compare(CLI::App& app) {
   app.add_option("a", args->a, "first image (PNG or PPM)")->required();
   app.add_option("b", args->b, "second image (PNG or PPM)")->required();
   app.add_option("--diff", args->diff, "write a heat map of the differences (PNG)");
-  app.add_option("--threshold", args->threshold, "channel difference that counts (0..255)")
-      ->check(CLI::Range(0, 255));
-  app.add_option("--neighborhood", args->neighborhood,
-                 "1: a pixel matches if any pixel of its 3x3 neighbourhood does")
-      ->check(CLI::Range(0, 1));
-  app.add_option("--max-bad-fraction", args->max_bad_fraction,
-                 "the images match with at most this fraction of differing pixels")
-      ->check(CLI::Range(0.0, 1.0));
+  int_range(app.add_option("--threshold", args->threshold,
+                           "a channel differs when it is off by more than this many levels "
+                           "(default: 0)"),
+            0, 255);
+  int_range(app.add_option("--neighborhood", args->neighborhood,
+                           "1: a pixel matches if any pixel of its 3x3 neighbourhood does "
+                           "(default: 0)"),
+            0, 1);
+  number_range(app.add_option("--max-bad-fraction", args->max_bad_fraction,
+                              "the images match with at most this fraction of differing pixels "
+                              "(default: 0)"),
+               0, 1);
   app.add_flag("--json", args->json, "print the metrics as JSON");
+  app.footer(
+      help_footer("  rayfarm compare student.png reference.png\n"
+                  "  rayfarm compare student.png reference.png --threshold 2 --neighborhood 1 "
+                  "--diff where.png\n"
+                  "  rayfarm compare a.ppm b.png --max-bad-fraction 0.01 --json\n",
+                  "the images differ (more pixels than --max-bad-fraction, or another size)"));
   return [args]() -> int {
     std::optional<Image> images[2];
     const std::string* names[2] = {&args->a, &args->b};
     for (int i = 0; i < 2; ++i) {
       auto bytes = read_input(*names[i]);
-      if (!bytes) return kUsage;
+      if (!bytes) return kBadInput;
       std::string error;
       images[i] = decode_image(*bytes, &error);
       if (!images[i]) {
         std::cerr << "rayfarm: " << *names[i] << ": " << error << "\n";
-        return kUsage;
+        return kBadInput;
       }
     }
     CompareOptions options{args->threshold, args->neighborhood == 1};
@@ -57,12 +67,12 @@ Runner add_compare(CLI::App& app) {
       if (args->json)
         std::cout << nlohmann::json{{"match", false}, {"error", error}}.dump(2) << "\n";
       std::cerr << "rayfarm: " << error << "\n";
-      return kDiffer;
+      return kNo;
     }
     const bool match = r->differing_fraction <= args->max_bad_fraction;
     if (!args->diff.empty()) {
       auto png = encode_image(diff_image(*images[0], *images[1], options), ImageFormat::png);
-      if (!write_output(args->diff, png.data(), png.size())) return kUsage;
+      if (!write_output(args->diff, png.data(), png.size())) return kBadInput;
     }
     if (args->json) {
       nlohmann::json j = compare_json(*r, options);
@@ -84,7 +94,7 @@ Runner add_compare(CLI::App& app) {
                   3LL * r->width * r->height);
       std::printf("match               %s\n", match ? "yes" : "no");
     }
-    return match ? kOk : kDiffer;
+    return match ? kOk : kNo;
   };
 }
 

@@ -1,6 +1,7 @@
 // `rayfarm convert SCENE --to json|model|pov [-o OUT]`.
 #include <algorithm>
 #include <iostream>
+#include <set>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -25,11 +26,20 @@ Runner add_convert(CLI::App& app) {
       ->check(CLI::IsMember({"json", "model", "pov"}));
   app.add_option("-o,--output", args->out, "output file (default: standard output)");
   args->flags.add_to(app);
+  app.footer(help_footer(
+      "  rayfarm convert scenes/cho.txt --to json -o cho.json\n"
+      "  rayfarm convert scenes/cho.json --to model            # the course's format\n"
+      "  rayfarm convert scenes/cho.txt --to json --spp 16     # render options into the JSON\n"
+      "  rayfarm convert scenes/cho.txt --to pov --width 400 --height 300 -o cho.pov\n"
+      "\nRender options: --to json writes them into the scene's render object; --to model "
+      "refuses them\n(the format has none); --to pov uses --camera, --width, --height, "
+      "--max-depth, --profile,\n--background and --highlight, and refuses the others.\n",
+      ""));
   return [args] {
     auto text = read_input(args->scene);
-    if (!text) return int(kInputError);
+    if (!text) return int(kBadInput);
     auto loaded = load_checked(args->scene, *text, false, LoadDetail::full, false);
-    if (!loaded) return int(kInputError);
+    if (!loaded) return int(kBadInput);
     std::string out;
     if (args->to == "json") {
       // Render options given here go into the scene's "render" object, over its own.
@@ -45,22 +55,34 @@ Runner add_convert(CLI::App& app) {
       if (!args->flags.values.empty()) {
         std::cerr << "rayfarm: the model format has no render options: give --"
                   << args->flags.values.begin()->first << " when rendering, or convert --to json\n";
-        return int(kUsage);
+        return int(kBadInput);
       }
       out = write_model(loaded->desc);
       if (!loaded->desc.render.empty())
         std::cerr << "rayfarm: note: the model format has no render options; the scene's "
                      "\"render\" object is not in the output\n";
     } else {
+      // What POV-Ray's SDL can say; the rest would be dropped without a word.
+      static const std::set<std::string> kPov = {"camera",  "width",      "height",   "max_depth",
+                                                 "profile", "background", "highlight"};
+      for (const auto& [name, value] : args->flags.values)
+        if (!kPov.count(name)) {
+          std::string flag = name;
+          std::replace(flag.begin(), flag.end(), '_', '-');
+          std::cerr << "rayfarm: --to pov cannot use --" << flag
+                    << ": the POV-Ray file takes --camera, --width, --height, --max-depth, "
+                       "--profile, --background and --highlight\n";
+          return int(kBadInput);
+        }
       auto options = resolve_options(*loaded->scene, args->flags);
-      if (!options) return int(kInputError);
+      if (!options) return int(kBadInput);
       if (!loaded->scene->find_camera(options->camera)) {
         std::cerr << "rayfarm: error: no camera named '" << options->camera << "'\n";
-        return int(kInputError);
+        return int(kBadInput);
       }
       out = write_pov(*loaded->scene, *options);
     }
-    return write_output(args->out, out.data(), out.size()) ? int(kOk) : int(kInputError);
+    return write_output(args->out, out.data(), out.size()) ? int(kOk) : int(kBadInput);
   };
 }
 

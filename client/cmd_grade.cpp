@@ -319,14 +319,15 @@ Runner add_grade(CLI::App& app) {
                  "image to write (without {out}, standard output is the image)")
       ->excludes(images);
   app.add_option("--format", args->format,
-                 "gradescope, prairielearn, autolab, junit, json, html or md")
-      ->capture_default_str();
-  app.add_option("-o,--output", args->out, "where to write the result (- for standard output)")
-      ->capture_default_str();
-  app.add_option("--timeout", args->timeout, "seconds each run of the program may take")
-      ->capture_default_str()->check(CLI::Range(0.1, 86400.0));
-  app.add_option("--memory", args->memory_mb, "MiB of memory each run may map")
-      ->capture_default_str()->check(CLI::Range(16.0, 1e6));
+                 "gradescope, prairielearn, autolab, junit, json, html or md (default: md)");
+  app.add_option("-o,--output", args->out,
+                 "where to write the result (default: -, standard output)");
+  number_range(app.add_option("--timeout", args->timeout,
+                              "seconds each run of the program may take (default: 60)"),
+               0.1, 86400);
+  number_range(
+      app.add_option("--memory", args->memory_mb, "MiB of memory each run may map (default: 2048)"),
+      16, 1e6);
   app.add_flag("--freeze", args->freeze,
                "render the references and write their hashes to the lock file");
   app.add_option("--lock", args->lock,
@@ -335,27 +336,36 @@ Runner add_grade(CLI::App& app) {
   app.add_option("--cache", args->cache, "folder of cached references");
   app.add_flag("--no-cache", args->no_cache, "render every reference afresh");
   app.add_flag("--no-hints", args->no_hints, "compare only");
-  app.add_option("--fail-under", args->fail_under,
-                 "exit 1 when the score is below this percentage")
-      ->check(CLI::Range(0.0, 100.0));
-  app.add_option("--threads", args->threads, "render threads (0: all cores)")->check(CLI::Range(0, 1024));
+  number_range(app.add_option("--fail-under", args->fail_under,
+                              "exit 1 when the score is below this percentage (default: never)"),
+               0, 100);
+  int_range(app.add_option("--threads", args->threads, "render threads (default: all cores)"), 0,
+            1024);
+  app.footer(help_footer(
+      "  rayfarm grade scenes/assignments/lab1/lab1.json --freeze\n"
+      "  rayfarm grade scenes/assignments/lab1/lab1.json --images "
+      "scenes/assignments/lab1/students/ben\n"
+      "  rayfarm grade lab1.json --run './raytrace {scene} > {out}' --format gradescope "
+      "-o results.json\n"
+      "  rayfarm grade lab1.json --images submission/ --fail-under 100   # pass/fail\n",
+      "the score is below --fail-under (grading ran: the result is written)"));
   return [args]() -> int {
     const std::optional<Format> format = parse_format(args->format);
     if (!format) {
       std::cerr << "rayfarm: --format must be gradescope, prairielearn, autolab, junit, json, "
                    "html or md\n";
-      return kUsage;
+      return kBadInput;
     }
     if (!args->freeze && args->images.empty() && args->run.empty()) {
       std::cerr << "rayfarm: give the student's images (--images DIR) or program (--run CMD)\n";
-      return kUsage;
+      return kBadInput;
     }
     GradeResult result;
     auto text = read_input(args->assignment);
     if (!text) {
       result.error = "cannot read the assignment " + args->assignment;
       emit(*args, result, *format);
-      return kUsage;
+      return kBadInput;
     }
     Diagnostics diags;
     std::optional<Assignment> assignment = parse_assignment(*text, diags);
@@ -363,7 +373,7 @@ Runner add_grade(CLI::App& app) {
       std::cerr << format_diagnostics(diags, args->assignment, *text);
       result.error = "the assignment has errors: " + diags.first_error()->message;
       if (args->out != "-") emit(*args, result, *format);
-      return kUsage;
+      return kBadInput;
     }
     std::error_code dir_ec;
     if (!args->images.empty() && !fs::is_directory(args->images, dir_ec)) {
@@ -371,7 +381,7 @@ Runner add_grade(CLI::App& app) {
       result.error = "the images folder " + args->images + " does not exist";
       std::cerr << "rayfarm: " << result.error << "\n";
       if (args->out != "-") emit(*args, result, *format);
-      return kUsage;
+      return kBadInput;
     }
     const fs::path base = fs::path(args->assignment).parent_path();
     LocalBackend backend(*args, base.empty() ? fs::path(".") : base);
@@ -391,9 +401,9 @@ Runner add_grade(CLI::App& app) {
           std::cerr << "rayfarm: test '" << t.name << "': " << t.message << "\n";
           ++errors;
         }
-      if (errors) return kInputError;
+      if (errors) return kBadInput;
       const std::string body = lock_json(result).dump(2) + "\n";
-      if (!write_output(lock.string(), body.data(), body.size())) return kInputError;
+      if (!write_output(lock.string(), body.data(), body.size())) return kBadInput;
       std::cerr << "rayfarm: froze " << result.tests.size() << " references in " << lock.string() << "\n";
       return kOk;
     }
@@ -410,14 +420,14 @@ Runner add_grade(CLI::App& app) {
                        (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : "");
         for (const std::string& p : problems) std::cerr << "rayfarm: " << p << "\n";
         emit(*args, result, *format);
-        return kUsage;
+        return kBadInput;
       }
     }
-    if (!emit(*args, result, *format)) return kInputError;
+    if (!emit(*args, result, *format)) return kBadInput;
     if (args->out != "-")
       std::cerr << "rayfarm: " << result.assignment << ": " << result.score << " / "
                 << result.max_score << " points\n";
-    if (args->fail_under >= 0 && 100 * result.fraction() < args->fail_under) return kInputError;
+    if (args->fail_under >= 0 && 100 * result.fraction() < args->fail_under) return kNo;
     return kOk;
   };
 }

@@ -1,13 +1,8 @@
-// The command line as rayfarmd's client: `render --server`, `status`, `cancel`, `wait`.
-#include <unistd.h>
-
-#include <atomic>
-#include <chrono>
-#include <csignal>
+// The command line as rayfarmd's client: `render --server`, `status`, `cancel`, `wait`,
+// `jobs`.
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <thread>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -15,9 +10,6 @@
 
 namespace rayfarm::cli {
 namespace {
-
-std::atomic<bool> interrupted{false};
-void on_sigint(int) { interrupted = true; }
 
 std::string url_encode(const std::string& s) {
   static const char* kHex = "0123456789ABCDEF";
@@ -33,101 +25,35 @@ bool valid_id(const std::string& id) {
   return id.size() == 32 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
 }
 
-void draw_bar(double fraction, const nlohmann::json& status, bool terminal) {
-  int spp_done = status.value("spp_done", 0);
-  std::string state = status.value("state", "?");
-  if (terminal) {
-    constexpr int kWidth = 30;
-    int filled = static_cast<int>(fraction * kWidth + 0.5);
-    std::string bar(filled, '#');
-    bar.resize(kWidth, '.');
-    std::fprintf(stderr, "\r[%s] %5.1f%%  %-8s spp %d", bar.c_str(), fraction * 100,
-                 state.c_str(), spp_done);
-    if (status.contains("queue_position") && status["queue_position"].get<int>() > 0)
-      std::fprintf(stderr, "  queue %d", status["queue_position"].get<int>());
-    if (status["error_estimate"].is_number())
-      std::fprintf(stderr, "  error %.2f", status["error_estimate"].get<double>());
-    std::fprintf(stderr, "   ");
-  } else {
-    std::fprintf(stderr, "%s %.1f%% spp %d\n", state.c_str(), fraction * 100, spp_done);
-  }
-  std::fflush(stderr);
-}
-
-// Follows a job until it ends. Returns its final status, or nullopt with `exit_code` set.
-std::optional<nlohmann::json> follow(const Remote& remote, const std::string& id, bool quiet,
-                                     int& exit_code, bool cancel_on_interrupt) {
-  auto client = remote.client();
-  const bool terminal = isatty(STDERR_FILENO);
-  auto last_line = std::chrono::steady_clock::now();
-  bool drawn = false;
-  for (;;) {
-    if (interrupted && cancel_on_interrupt) {
-      if (drawn && terminal) std::fprintf(stderr, "\n");
-      auto res = client->Delete("/jobs/" + id, remote.headers());
-      std::cerr << "rayfarm: interrupted; "
-                << (res && res->status == 200 ? "canceled job " : "could not cancel job ") << id
-                << "\n";
-      exit_code = 130;
-      return std::nullopt;
-    }
-    auto res = client->Get("/jobs/" + id, remote.headers());
-    if (!res || res->status != 200) {
-      if (drawn && terminal) std::fprintf(stderr, "\n");
-      exit_code = report_http_error(res, "job " + id);
-      return std::nullopt;
-    }
-    auto status = nlohmann::json::parse(res->body, nullptr, false);
-    if (status.is_discarded()) {
-      std::cerr << "rayfarm: the server sent a status that is not JSON\n";
-      exit_code = kServerError;
-      return std::nullopt;
-    }
-    std::string state = status.value("state", "");
-    double progress = status.value("progress", 0.0);
-    bool final_state = state == "done" || state == "failed" || state == "canceled";
-    auto now = std::chrono::steady_clock::now();
-    if (!quiet && (terminal || now - last_line > std::chrono::seconds(2) || final_state)) {
-      if (terminal || !final_state || drawn) {
-        draw_bar(progress, status, terminal);
-        drawn = true;
-      }
-      last_line = now;
-    }
-    if (final_state) {
-      if (drawn && terminal) std::fprintf(stderr, "\n");
-      return status;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  }
-}
-
+// A job that ended: saves its image, or says why there is none. The server's warnings about
+// the scene (a sphere behind the eye) are shown with the scene's lines when it is at hand.
 int finish(const Remote& remote, const nlohmann::json& status, const std::string& out,
-           const std::string& format, bool quiet) {
+           const std::string& format, bool quiet, const std::string& scene_name = "",
+           const std::string* scene_text = nullptr) {
   std::string id = status.value("id", "");
   std::string state = status.value("state", "");
+  if (!quiet && status.contains("warnings") && status["warnings"].is_array())
+    for (const auto& w : status["warnings"]) {
+      if (!w.is_object()) continue;
+      Diagnostic d{Severity::warning,
+                   w.value("code", ""),
+                   w.value("message", ""),
+                   {w.value("line", 0), w.value("column", 0), w.value("path", "")}};
+      std::cerr << format_diagnostic(d, scene_name.empty() ? "job " + id : scene_name,
+                                     scene_text ? *scene_text : "");
+    }
   if (state != "done") {
-    std::string message = status["error"].is_object()
+    std::string message = status.contains("error") && status["error"].is_object()
                               ? status["error"].value("message", "")
                               : std::string(state == "canceled" ? "the job was canceled" : "");
     std::cerr << "rayfarm: job " << id << " " << state << (message.empty() ? "" : ": " + message)
               << "\n";
-    return kInputError;
+    return kNo;
   }
-  if (out.empty()) return kOk;
   auto res = remote.client()->Get("/jobs/" + id + "/image?format=" + format, remote.headers());
   if (!res || res->status != 200) return report_http_error(res, "fetching the image");
-  if (!write_output(out, res->body.data(), res->body.size())) return kInputError;
-  if (!quiet) {
-    const auto& st = status["stats"];
-    const auto& opts = status["options"];
-    std::fprintf(stderr, "%s: %dx%d, spp %d, %.1f ms on %s, %.2f Mrays/s, cache %s (job %s)\n",
-                 out == "-" ? "<stdout>" : out.c_str(), opts.value("width", 0),
-                 opts.value("height", 0), status.value("spp_done", 0),
-                 st.value("render_ms", 0.0), remote.url.c_str(),
-                 st.value("rays_per_second", 0.0) / 1e6, st.value("cache", "miss").c_str(),
-                 id.c_str());
-  }
+  if (!write_output(out, res->body.data(), res->body.size())) return kBadInput;
+  if (!quiet) std::cerr << summary_line(status, out, remote.url) << "\n";
   return kOk;
 }
 
@@ -137,17 +63,21 @@ struct IdArgs {
   std::string token;
   std::string out;
   bool quiet = false;
+  bool json = false;
 };
 
-std::shared_ptr<IdArgs> add_id_args(CLI::App& app) {
+std::shared_ptr<IdArgs> add_id_args(CLI::App& app, bool with_id = true) {
   auto args = std::make_shared<IdArgs>();
-  app.add_option("id", args->id, "job id")->required();
-  app.add_option("--server", args->server, "rayfarmd URL (default: $RAYFARM_SERVER)");
+  if (with_id)
+    app.add_option("id", args->id, "job ID (32 hex digits), as render --detach prints it")
+        ->required();
+  app.add_option("--server", args->server,
+                 "rayfarmd's URL, http://HOST[:PORT] (default: $RAYFARM_SERVER)");
   app.add_option("--token", args->token, "bearer token (default: $RAYFARM_TOKEN)");
   return args;
 }
 
-std::optional<Remote> remote_for(const IdArgs& args) {
+std::optional<Remote> remote_for(const IdArgs& args, bool with_id = true) {
   Remote r{server_url(args.server), server_token(args.token)};
   if (r.url.empty()) {
     std::cerr << "rayfarm: no server: give --server URL or set RAYFARM_SERVER\n";
@@ -157,7 +87,7 @@ std::optional<Remote> remote_for(const IdArgs& args) {
     std::cerr << "rayfarm: " << bad << "\n";
     return std::nullopt;
   }
-  if (!valid_id(args.id)) {
+  if (with_id && !valid_id(args.id)) {
     std::cerr << "rayfarm: '" << args.id << "' is not a job id (32 hex digits)\n";
     return std::nullopt;
   }
@@ -169,7 +99,7 @@ std::optional<Remote> remote_for(const IdArgs& args) {
 int remote_render(const std::string& scene_path, const std::string& text,
                   const std::map<std::string, std::string>& textures, const std::string& out,
                   const OptionSet& options, const std::string& format, const Remote& remote,
-                  bool quiet) {
+                  bool quiet, bool detach) {
   std::string query;
   for (const OptionValue& v : options) {
     if (v.name == "format") continue;
@@ -179,7 +109,7 @@ int remote_render(const std::string& scene_path, const std::string& text,
   auto post = [&] {
     if (textures.empty())
       return client->Post("/render" + query, remote.headers(), text, "text/plain");
-    // Part names are the paths exactly as the scene writes them (SPEC §5).
+    // Part names are the paths exactly as the scene writes them (docs/http-api.md#textures).
     httplib::MultipartFormDataItems parts = {{"scene", text, "scene", "text/plain"}};
     for (const auto& [path, bytes] : textures)
       parts.push_back({path, bytes, std::filesystem::path(path).filename().string(),
@@ -195,52 +125,119 @@ int remote_render(const std::string& scene_path, const std::string& text,
     std::cerr << "rayfarm: the server's answer has no job id\n";
     return kServerError;
   }
-  std::signal(SIGINT, on_sigint);
+  if (detach) {
+    // The ID alone on standard output, for `id=$(rayfarm render ... --detach)`.
+    std::cout << id << std::endl;
+    if (!quiet)
+      std::cerr << "rayfarm: job " << id << " queued on " << remote.url
+                << "; status: " << remote.url << "/jobs/" << id << "\n"
+                << "rayfarm: then: rayfarm wait " << id << " -o " << out << "\n";
+    return kOk;
+  }
+  if (!quiet) std::cerr << "rayfarm: job " << id << " on " << remote.url << "\n";
   int code = kOk;
-  auto status = follow(remote, id, quiet, code, true);
+  auto status = follow_job(remote, id, quiet, true, code);
   if (!status) return code;
-  return finish(remote, *status, out, format, quiet);
+  return finish(remote, *status, out, format, quiet, display_name(scene_path), &text);
 }
 
 Runner add_status(CLI::App& app) {
   auto args = add_id_args(app);
+  app.add_flag("--json", args->json, "print the server's status document as it is");
+  app.footer(help_footer(
+      "  rayfarm status 3f0c8e6d9a2b4c1e8f7a6b5c4d3e2f1a --server http://localhost:8080\n"
+      "  rayfarm status $id --json | jq .progress\n",
+      "", true));
   return [args]() -> int {
     auto remote = remote_for(*args);
-    if (!remote) return kUsage;
+    if (!remote) return kBadInput;
     auto res = remote->client()->Get("/jobs/" + args->id, remote->headers());
     if (!res || res->status != 200) return report_http_error(res, "job " + args->id);
     auto status = nlohmann::json::parse(res->body, nullptr, false);
-    std::cout << (status.is_discarded() ? res->body : status.dump(2)) << "\n";
+    if (status.is_discarded() || !status.is_object()) {
+      std::cerr << "rayfarm: the server sent a status that is not JSON\n";
+      return kServerError;
+    }
+    if (args->json)
+      std::cout << status.dump(2) << "\n";
+    else
+      std::cout << status_text(status, remote->url);
     return kOk;
   };
 }
 
 Runner add_cancel(CLI::App& app) {
   auto args = add_id_args(app);
+  app.footer(help_footer("  rayfarm cancel $id --server http://localhost:8080\n", "", true));
   return [args]() -> int {
     auto remote = remote_for(*args);
-    if (!remote) return kUsage;
+    if (!remote) return kBadInput;
     auto res = remote->client()->Delete("/jobs/" + args->id, remote->headers());
     if (!res || res->status != 200) return report_http_error(res, "canceling " + args->id);
-    std::cout << "canceled " << args->id << "\n";
+    auto status = nlohmann::json::parse(res->body, nullptr, false);
+    const std::string state = status.is_object() ? status.value("state", "") : "";
+    // The answer is the state after the cancel: a job that had already ended says so.
+    if (state == "canceled" || state.empty())
+      std::cout << "canceled " << args->id << "\n";
+    else
+      std::cout << args->id << " is " << state << "\n";
     return kOk;
   };
 }
 
 Runner add_wait(CLI::App& app) {
   auto args = add_id_args(app);
-  app.add_option("-o,--output", args->out, "save the image here when done (- for stdout; default ID.png)");
-  app.add_flag("-q,--quiet", args->quiet, "no progress");
+  app.add_option("-o,--output", args->out,
+                 "save the image here when done: .png or .ppm, - for standard output "
+                 "(default: ID.png)");
+  app.add_flag("-q,--quiet", args->quiet, "no progress bar or summary line");
+  app.footer(
+      help_footer("  rayfarm wait $id -o cho.png --server http://localhost:8080\n"
+                  "  # where id=$(rayfarm render scenes/cho.txt --server URL --detach)\n",
+                  "the job failed or was canceled", true));
   return [args]() -> int {
     auto remote = remote_for(*args);
-    if (!remote) return kUsage;
+    if (!remote) return kBadInput;
     if (args->out.empty()) args->out = args->id + ".png";  // waiting for nothing helps nobody
+    if (std::string bad = check_output(args->out, ""); !bad.empty()) {
+      std::cerr << "rayfarm: " << bad << "\n";
+      return kBadInput;
+    }
     int code = kOk;
-    auto status = follow(*remote, args->id, args->quiet, code, false);
+    // Ctrl-C here stops waiting; the job is someone's to cancel with `rayfarm cancel`.
+    auto status = follow_job(*remote, args->id, args->quiet, false, code);
     if (!status) return code;
     std::string format = args->out.size() > 4 && args->out.substr(args->out.size() - 4) == ".ppm"
                              ? "ppm" : "png";
     return finish(*remote, *status, args->out, format, args->quiet);
+  };
+}
+
+Runner add_jobs(CLI::App& app) {
+  auto args = add_id_args(app, false);
+  app.add_flag("--json", args->json, "print the server's list as it is");
+  app.footer(
+      help_footer("  rayfarm jobs --server http://localhost:8080\n"
+                  "  RAYFARM_SERVER=http://localhost:8080 rayfarm jobs --json\n",
+                  "", true));
+  return [args]() -> int {
+    auto remote = remote_for(*args, false);
+    if (!remote) return kBadInput;
+    auto res = remote->client()->Get("/jobs", remote->headers());
+    if (!res || res->status != 200) return report_http_error(res, "listing jobs");
+    auto body = nlohmann::json::parse(res->body, nullptr, false);
+    if (body.is_discarded() || !body.contains("jobs") || !body["jobs"].is_array()) {
+      std::cerr << "rayfarm: the server's list of jobs is not JSON\n";
+      return kServerError;
+    }
+    if (args->json) {
+      std::cout << body.dump(2) << "\n";
+    } else if (body["jobs"].empty()) {
+      std::cerr << "rayfarm: no jobs of yours on " << remote->url << "\n";
+    } else {
+      std::cout << jobs_table(body["jobs"]);
+    }
+    return kOk;
   };
 }
 

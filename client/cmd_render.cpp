@@ -24,8 +24,14 @@ struct RenderArgs {
   bool quiet = false;
   std::string server;
   std::string token;
+  bool detach = false;
   OptionFlags flags;
 };
+
+std::string format_flag(const OptionFlags& flags) {
+  auto it = flags.values.find("format");
+  return it == flags.values.end() ? "" : it->second;
+}
 
 std::string default_output(const std::string& scene) {
   if (scene == "-") return "out.png";
@@ -38,25 +44,6 @@ ImageFormat format_for(const std::string& out, const OptionFlags& flags) {
   std::string ext = std::filesystem::path(out).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext == ".ppm" ? ImageFormat::ppm : ImageFormat::png;
-}
-
-// An output the user would not expect is refused before any work: a name whose extension
-// says another format, or image bytes sent to a terminal.
-std::string check_output(const std::string& out, const OptionFlags& flags) {
-  if (out == "-") {
-    if (isatty(STDOUT_FILENO))
-      return "not writing image bytes to a terminal: redirect standard output (> out.png) or "
-             "give -o FILE";
-    return "";
-  }
-  std::string ext = std::filesystem::path(out).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext.empty()) return "";
-  if (ext != ".png" && ext != ".ppm")
-    return "'" + out + "': rayfarm writes PNG or PPM images; name the file .png or .ppm";
-  if (auto it = flags.values.find("format"); it != flags.values.end() && "." + it->second != ext)
-    return "'" + out + "' says " + ext.substr(1) + " but --format is " + it->second;
-  return "";
 }
 
 // "6.79 Mrays/s", "1.2 k primary", "12 rays/s", "0 shadow".
@@ -91,44 +78,68 @@ void print_summary(const std::string& out, int w, int h, const RenderStats& st, 
 Runner add_render(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   app.add_option("scene", args->scene, "scene file (model or JSON; - for stdin)")->required();
-  app.add_option("-o,--output", args->out,
-                 "output image: .png or .ppm, - for standard output (default: SCENE.png)");
-  app.add_option("--threads", args->threads, "render threads (default: all cores)")
-      ->check(CLI::Range(0, 1024));
-  app.add_flag("-q,--quiet", args->quiet, "no summary line");
-  app.add_option("--server", args->server,
-                 "render on this rayfarmd (default: $RAYFARM_SERVER; none: render here)");
+  auto* output = app.add_option(
+      "-o,--output", args->out,
+      "output image: .png or .ppm, - for standard output (default: SCENE's name with .png, here)");
+  int_range(app.add_option("--threads", args->threads, "render threads (default: all cores)"), 0,
+            1024);
+  app.add_flag("-q,--quiet", args->quiet, "no progress bar, warnings or summary line");
+  auto* server = app.add_option(
+      "--server", args->server,
+      "render on this rayfarmd, http://HOST[:PORT] (default: $RAYFARM_SERVER; none or '': "
+      "render here)");
   app.add_option("--token", args->token, "bearer token for the server (default: $RAYFARM_TOKEN)");
+  app.add_flag("--detach", args->detach,
+               "with a server: submit, print the job ID and return (then: rayfarm wait ID)");
   args->flags.add_to(app);
-  return [args]() -> int {
+  app.footer(
+      help_footer("  rayfarm render scenes/cho.txt                     # writes cho.png\n"
+                  "  rayfarm render scenes/cho.txt -o aa.png --spp 16 --seed 3\n"
+                  "  rayfarm render scenes/cho.txt -o - --format ppm > cho.ppm\n"
+                  "  rayfarm render scenes/cameras.txt --camera above --width 400 --height 400\n"
+                  "  rayfarm render scenes/cho.txt --server http://localhost:8080 -o cho.png\n"
+                  "  id=$(rayfarm render scenes/cho.txt --server http://localhost:8080 --detach)\n",
+                  "the server's job failed or was canceled", true));
+  return [args, server, output]() -> int {
     const auto t0 = std::chrono::steady_clock::now();
-    auto text = read_input(args->scene);
-    if (!text) return kInputError;
-    std::string out_path = args->out.empty() ? default_output(args->scene) : args->out;
-    if (std::string bad = check_output(out_path, args->flags); !bad.empty()) {
-      std::cerr << "rayfarm: " << bad << "\n";
-      return kUsage;
+    // `--server ''` renders here as `none` does, whatever RAYFARM_SERVER says.
+    if (server->count() > 0 && args->server.empty()) args->server = "none";
+    const std::string url = server_url(args->server);
+    if (args->detach && url.empty()) {
+      std::cerr << "rayfarm: --detach needs a server: give --server URL or set RAYFARM_SERVER\n";
+      return kBadInput;
     }
-    if (std::string url = server_url(args->server); !url.empty()) {
+    if (args->detach && (output->count() > 0 || !format_flag(args->flags).empty())) {
+      std::cerr << "rayfarm: --detach saves no image: give -o (or --format) to rayfarm wait ID\n";
+      return kBadInput;
+    }
+    auto text = read_input(args->scene);
+    if (!text) return kBadInput;
+    std::string out_path = args->out.empty() ? default_output(args->scene) : args->out;
+    if (!args->detach)
+      if (std::string bad = check_output(out_path, format_flag(args->flags)); !bad.empty()) {
+        std::cerr << "rayfarm: " << bad << "\n";
+        return kBadInput;
+      }
+    if (!url.empty()) {
       if (std::string bad = check_server_url(url); !bad.empty()) {
         std::cerr << "rayfarm: " << bad << "\n";
-        return kUsage;
+        return kBadInput;
       }
       // Checked here, its textures read as a local render reads them: the server has no
       // access to this machine's files, so they are uploaded with the scene.
       const FileResolver files = FileResolver::beside(args->scene);
       const RecordingResolver textures(files);
-      if (!load_checked(args->scene, *text, false, LoadDetail::scene, &textures))
-        return kInputError;
+      if (!load_checked(args->scene, *text, false, LoadDetail::scene, &textures)) return kBadInput;
       ImageFormat format = format_for(out_path, args->flags);
       return remote_render(args->scene, *text, textures.files(), out_path, args->flags.as_set(),
                            std::string(to_string(format)), Remote{url, server_token(args->token)},
-                           args->quiet);
+                           args->quiet, args->detach);
     }
     auto loaded = load_checked(args->scene, *text, false);
-    if (!loaded) return kInputError;
+    if (!loaded) return kBadInput;
     auto options = resolve_options(*loaded->scene, args->flags);
-    if (!options) return kInputError;
+    if (!options) return kBadInput;
     const std::string& out = out_path;
     options->format = format_for(out, args->flags);
     if (!args->quiet) {
@@ -136,7 +147,8 @@ Runner add_render(CLI::App& app) {
       // a black image with no word is the worst answer to such a scene.
       Diagnostics lints;
       lint_scene(*loaded->scene, *options, lints);
-      for (const Diagnostic& d : lints.items()) std::cerr << format_diagnostic(d, display_name(args->scene), *text);
+      for (const Diagnostic& d : lints.items())
+        std::cerr << format_diagnostic(d, display_name(args->scene), *text);
     }
 
     ProgressBar bar(isatty(STDERR_FILENO) && !args->quiet);
@@ -148,10 +160,10 @@ Runner add_render(CLI::App& app) {
     bar.finish();
     if (!error.empty()) {
       std::cerr << "rayfarm: error: " << error << "\n";
-      return kInputError;
+      return kBadInput;
     }
     auto bytes = encode_image(image, options->format);
-    if (!write_output(out, bytes.data(), bytes.size())) return kInputError;
+    if (!write_output(out, bytes.data(), bytes.size())) return kBadInput;
     double total_ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (!args->quiet) print_summary(out, image.width, image.height, stats, total_ms);

@@ -1,4 +1,4 @@
-// `rayfarm report SCENE [--out DIR]`: error against run time (SPEC §7).
+// `rayfarm report SCENE [--out DIR]`: error against run time (docs/numerics.md).
 #include <unistd.h>
 
 #include <cstdio>
@@ -23,31 +23,63 @@ struct ReportArgs {
 Runner add_report(CLI::App& app) {
   auto args = std::make_shared<ReportArgs>();
   app.add_option("scene", args->scene, "scene file")->required();
-  app.add_option("--out", args->out, "directory for report.md, report.csv and report.svg")
-      ->capture_default_str();
-  app.add_option("--runs", args->settings.runs, "timed runs per setting (median)")
-      ->check(CLI::Range(1, 100))->capture_default_str();
-  app.add_option("--reference-spp", args->settings.reference_spp, "spp of the reference")
-      ->check(CLI::Range(1, 1 << 16))->capture_default_str();
-  app.add_option("--reference-depth", args->settings.reference_depth,
-                 "max_depth of the reference")->check(CLI::Range(0, 100000))->capture_default_str();
-  app.add_option("--max-pixels", args->settings.max_pixels,
-                 "larger images are rendered smaller, same window")
-      ->check(CLI::Range(1LL, 1LL << 26))->capture_default_str();
-  app.add_option("--threads", args->settings.threads, "render threads (default: all cores)")
-      ->check(CLI::Range(0, 1024));
+  const ReportSettings& d = args->settings;  // the defaults, for the help
+  app.add_option("--out", args->out,
+                 "directory for report.md, report.csv and report.svg (default: report)");
+  int_range(
+      app.add_option("--runs", args->settings.runs,
+                     "timed runs per setting (median) (default: " + std::to_string(d.runs) + ")"),
+      1, 100);
+  int_range(app.add_option("--reference-spp", args->settings.reference_spp,
+                           "spp of the reference; the spp ladder stops below it (default: " +
+                               std::to_string(d.reference_spp) + ")"),
+            1, 1 << 16);
+  int_range(app.add_option(
+                "--reference-depth", args->settings.reference_depth,
+                "max_depth of the reference (default: " + std::to_string(d.reference_depth) + ")"),
+            0, 100000);
+  int_range(app.add_option("--max-pixels", args->settings.max_pixels,
+                           "larger images are rendered smaller, same window (default: " +
+                               std::to_string(d.max_pixels) + ")"),
+            1, 1LL << 26);
+  int_range(
+      app.add_option("--threads", args->settings.threads, "render threads (default: all cores)"), 0,
+      1024);
   app.add_flag("-q,--quiet", args->quiet, "no progress bar");
-  args->flags.add_to(app);
+  // The sweep sets these itself: given here they would be ignored.
+  const std::string ladder =
+      "report renders a ladder of spp (1 to 64) against a reference of "
+      "--reference-spp";
+  args->flags.add_to(app, {{"spp", ladder},
+                           {"format", "report writes report.md, report.csv and report.svg"},
+                           {"target_error", ladder + ", each to the end"},
+                           {"time_limit", ladder + ", each to the end"}});
+  app.footer(help_footer(
+      "  rayfarm report scenes/cho.txt --out report/\n"
+      "  rayfarm report scenes/mirrors.txt --runs 1 --max-pixels 20000 --reference-spp 128\n",
+      ""));
   return [args]() -> int {
     auto text = read_input(args->scene);
-    if (!text) return kInputError;
+    if (!text) return kBadInput;
     auto loaded = load_checked(args->scene, *text, false);
-    if (!loaded) return kInputError;
+    if (!loaded) return kBadInput;
     auto options = resolve_options(*loaded->scene, args->flags);
-    if (!options) return kInputError;
+    if (!options) return kBadInput;
     if (!loaded->scene->find_camera(options->camera)) {
       std::cerr << "rayfarm: error: no camera named '" << options->camera << "'\n";
-      return kInputError;
+      return kBadInput;
+    }
+    // A rung at or above the reference's spp would be measured against itself (an error
+    // of 0 and a PSNR of inf, marked optimal): the ladder stops below the reference.
+    auto& ladder_spp = args->settings.spp;
+    const size_t rungs = ladder_spp.size();
+    std::erase_if(ladder_spp, [&](int spp) { return spp >= args->settings.reference_spp; });
+    if (ladder_spp.size() != rungs) {
+      std::string kept;
+      for (int spp : ladder_spp) kept += (kept.empty() ? "" : ", ") + std::to_string(spp);
+      std::cerr << "rayfarm: note: the spp ladder stops below --reference-spp "
+                << args->settings.reference_spp << ": "
+                << (kept.empty() ? "no spp rows" : "spp " + kept) << "\n";
     }
     const bool terminal = isatty(STDERR_FILENO) && !args->quiet;
     std::string name = std::filesystem::path(args->scene).filename().string();
@@ -70,16 +102,17 @@ Runner add_report(CLI::App& app) {
     std::filesystem::create_directories(args->out, ec);
     if (ec) {
       std::cerr << "rayfarm: cannot create " << args->out << ": " << ec.message() << "\n";
-      return kInputError;
+      return kBadInput;
     }
     namespace fs = std::filesystem;
     std::string md = report_markdown(report), csv = report_csv(report), svg = report_svg(report);
     if (!write_output((fs::path(args->out) / "report.md").string(), md.data(), md.size()) ||
         !write_output((fs::path(args->out) / "report.csv").string(), csv.data(), csv.size()) ||
         !write_output((fs::path(args->out) / "report.svg").string(), svg.data(), svg.size()))
-      return kInputError;
+      return kBadInput;
     std::cout << md;
-    std::cerr << "rayfarm: wrote " << args->out << "/report.md, report.csv, report.svg\n";
+    std::cerr << "rayfarm: wrote " << (fs::path(args->out) / "report.md").string()
+              << ", report.csv, report.svg\n";
     return kOk;
   };
 }

@@ -25,24 +25,28 @@ Runner add_trace(CLI::App& app) {
   app.add_option("x", args->x, "pixel column, 0 at the left")->required();
   app.add_option("y", args->y, "pixel row, 0 at the top")->required();
   app.add_flag("--json", args->json, "print the explanation as JSON");
-  args->flags.add_to(app);
+  args->flags.add_to(app, {{"format", "trace prints the pixel's bytes, not an image"}});
+  app.footer(
+      help_footer("  rayfarm trace scenes/cho.txt 400 300\n"
+                  "  rayfarm trace scenes/cho.txt 400 300 --profile cpsc102 --json\n",
+                  ""));
   return [args]() -> int {
     auto text = read_input(args->scene);
-    if (!text) return kInputError;
+    if (!text) return kBadInput;
     auto loaded = load_checked(args->scene, *text, false);
-    if (!loaded) return kInputError;
+    if (!loaded) return kBadInput;
     auto options = resolve_options(*loaded->scene, args->flags);
-    if (!options) return kInputError;
+    if (!options) return kBadInput;
     std::string error;
     const auto explainer = Explainer::create(*loaded->scene, *options, &error);
     if (!explainer) {
       std::cerr << "rayfarm: error: " << error << "\n";
-      return kInputError;
+      return kBadInput;
     }
     const auto explanation = explainer->explain(args->x, args->y, &error);
     if (!explanation) {  // the only refusal left: a pixel outside the image
       std::cerr << "rayfarm: error: " << error << "\n";
-      return kUsage;
+      return kBadInput;
     }
     if (args->json)
       std::cout << explanation_json(*explanation).dump(2) << "\n";

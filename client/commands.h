@@ -19,5 +19,6 @@ Runner add_report(CLI::App& app);
 Runner add_status(CLI::App& app);
 Runner add_cancel(CLI::App& app);
 Runner add_wait(CLI::App& app);
+Runner add_jobs(CLI::App& app);
 
 }  // namespace rayfarm::cli

@@ -1,4 +1,4 @@
-// rayfarm: the command line (SPEC §6). Renders locally with no server, or as rayfarmd's
+// rayfarm: the command line (docs/cli.md). Renders locally with no server, or as rayfarmd's
 // client; checks, converts and compares.
 #include <iostream>
 #include <map>
@@ -8,7 +8,7 @@
 
 int main(int argc, char** argv) {
   using namespace rayfarm::cli;
-  CLI::App app{"rayfarm: ray-trace the course's model files and JSON scenes"};
+  CLI::App app{"rayfarm: ray-trace the course's model files and JSON scenes", "rayfarm"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "rayfarm 0.1.0");
   std::map<CLI::App*, Runner> runners;
@@ -26,6 +26,21 @@ int main(int argc, char** argv) {
   add("status", "show a job's status on a server", add_status);
   add("cancel", "cancel a job on a server", add_cancel);
   add("wait", "wait for a job on a server and fetch its image", add_wait);
+  add("jobs", "list your jobs on a server", add_jobs);
+  app.footer(
+      "\nrayfarm COMMAND --help shows a command's options and examples.\n"
+      "\nEnvironment:\n"
+      "  RAYFARM_SERVER  the server of render, status, cancel, wait and jobs (--server)\n"
+      "  RAYFARM_TOKEN   the bearer token for that server (--token)\n"
+      "  RAYFARM_CACHE   grade's folder of cached references (--cache)\n"
+      "\nExit codes (the same for every command):\n"
+      "  0    done\n"
+      "  1    the answer is no: check found errors, compare's images differ, grade's score is\n"
+      "       below --fail-under, the server's job failed or was canceled\n"
+      "  2    usage, or input to fix: a file that cannot be read or written, a scene with\n"
+      "       errors, a request the server refused (401, 404, 422, ...)\n"
+      "  3    the server cannot be reached, is busy (429) or failed (5xx)\n"
+      "  130  interrupted (Ctrl-C)\n");
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -35,10 +50,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
-    return kUsage;
+    std::cerr << usage_message(app, e);
+    return kBadInput;
   }
   for (auto& [sub, run] : runners)
     if (sub->parsed()) return run();
-  return kUsage;
+  return kBadInput;
 }

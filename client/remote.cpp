@@ -86,14 +86,19 @@ int report_http_error(const httplib::Result& result, const std::string& what,
         d.where = {item.value("line", 0), item.value("column", 0), item.value("path", "")};
         std::cerr << format_diagnostic(d, scene_name, scene_text ? *scene_text : "");
       }
-      return kInputError;
+      return kBadInput;
     }
     message = e.value("message", message);
-    if (e.contains("limit")) message += " (limit: " + e["limit"].get<std::string>() + ")";
+    if (e.contains("limit") && e["limit"].is_string())
+      message += " (limit: " + e["limit"].get<std::string>() + ")";
   }
+  if (status == 401)
+    message +=
+        ": give your token with --token TOKEN or in RAYFARM_TOKEN (a token that was "
+        "given is not one the server knows)";
   std::cerr << "rayfarm: " << what << ": " << message << "\n";
   bool client_fault = status >= 400 && status < 500 && status != 429 && status != 408;
-  return client_fault ? kInputError : kServerError;
+  return client_fault ? kBadInput : kServerError;
 }
 
 }  // namespace rayfarm::cli

@@ -28,17 +28,19 @@ ApiError scene_error(const Diagnostics& diags) {
     e.path = first->where.path;
   }
   e.details = nlohmann::json::array();
-  for (const Diagnostic& d : diags.items()) {
-    if (d.severity != Severity::error) continue;
-    nlohmann::json item = {{"code", d.code}, {"message", d.message}};
-    if (d.where.line > 0) {
-      item["line"] = d.where.line;
-      item["column"] = d.where.column;
-    }
-    if (!d.where.path.empty()) item["path"] = d.where.path;
-    e.details.push_back(item);
-  }
+  for (const Diagnostic& d : diags.items())
+    if (d.severity == Severity::error) e.details.push_back(diagnostic_json(d));
   return e;
+}
+
+nlohmann::json diagnostic_json(const Diagnostic& d) {
+  nlohmann::json item = {{"code", d.code}, {"message", d.message}};
+  if (d.where.line > 0) {
+    item["line"] = d.where.line;
+    item["column"] = d.where.column;
+  }
+  if (!d.where.path.empty()) item["path"] = d.where.path;
+  return item;
 }
 
 nlohmann::json ApiError::body() const {

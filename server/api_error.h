@@ -30,5 +30,7 @@ ApiError api_error(int status, std::string code, std::string message);
 ApiError limit_error(const std::string& limit, const std::string& message);
 // 400 invalid_scene: the first error's place, and every error.
 ApiError scene_error(const Diagnostics& diags);
+// One error or warning as the API shows it: code, message, and line/column or path.
+nlohmann::json diagnostic_json(const Diagnostic& d);
 
 }  // namespace rayfarm::server

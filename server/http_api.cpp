@@ -37,8 +37,10 @@ std::string route_label(const std::string& method, const std::string& path) {
   std::smatch m;
   if (path.size() <= kMaxPathLength && std::regex_match(path, m, job))
     return method + " /jobs/:id" + m[1].str();
-  for (const char* known : {"/render", "/jobs", "/compare", "/samples", "/healthz", "/metrics"})
+  for (const char* known :
+       {"/", "/render", "/jobs", "/compare", "/grade", "/check", "/samples", "/healthz", "/metrics"})
     if (path == known) return method + " " + known;
+  if (path.rfind("/web/", 0) == 0) return method + " /web/:file";
   return method + " other";
 }
 
@@ -90,6 +92,7 @@ void HttpApi::harden() {
         GuardedServer::close_after(res);
       return httplib::Server::HandlerResponse::Handled;
     }
+    if (answer_preflight(req, res)) return httplib::Server::HandlerResponse::Handled;
     // A request with neither Content-Length nor Transfer-Encoding has an empty body (RFC 9112
     // §6.3), as `curl -X POST URL` sends it; this cpp-httplib would read until the client
     // gave up instead.
@@ -104,6 +107,18 @@ void HttpApi::harden() {
       headers.emplace(kFormEncodedMark, "1");  // for a hint if the scene is one line (curl -d)
     }
     return httplib::Server::HandlerResponse::Unhandled;
+  });
+
+  // Cross-origin answers carry the CORS headers for the one configured origin only, errors
+  // included (a grader's page must be able to read a 401 or a 429).
+  server_.set_post_routing_handler([this](const Request& req, Response& res) {
+    const std::string& origin = service_.settings().cors_origin;
+    if (origin.empty()) return;
+    res.set_header("Vary", "Origin");
+    if (req.get_header_value("Origin") != origin) return;
+    res.set_header("Access-Control-Allow-Origin", origin);
+    res.set_header("Access-Control-Expose-Headers",
+                   "Location, Retry-After, ETag, X-Job-Id, X-Job-State, X-Render-Ms, X-Cache");
   });
 
   server_.set_exception_handler([](const Request&, Response& res, std::exception_ptr) {
@@ -190,13 +205,17 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
       return true;
     }
   }
-  // One response sent once: a many-part Range request would multiply it.
-  if (req.ranges.size() > 1) {
+  // Ranges are not offered (no Accept-Ranges): a many-part request would multiply a
+  // response, and the library answers a single range with a slice under status 200, which a
+  // client would take for the whole image. The whole resource is always sent.
+  const bool many_ranges = req.ranges.size() > 1;
+  const_cast<Request&>(req).ranges.clear();  // the library's own object
+  if (many_ranges) {
     send_error(res, 416, "range_not_satisfiable", "multi-range requests are not supported");
     return true;
   }
   const bool roster = !st.tokens_file.empty();
-  if ((roster || !st.tokens.empty()) && req.path != "/healthz" && req.path != "/metrics") {
+  if ((roster || !st.tokens.empty()) && !open_to_all(req)) {
     std::string token = bearer_token(req);
     bool ok = false;
     if (roster && !token.empty()) {
@@ -217,6 +236,31 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
   return false;
 }
 
+bool HttpApi::open_to_all(const Request& req) {
+  if (req.path == "/healthz" || req.path == "/metrics") return true;
+  // The page and its files hold no one's data, and a browser cannot send a token to load
+  // them: the page asks for the token and sends it on its own requests.
+  const bool get = req.method == "GET" || req.method == "HEAD";
+  if (get && (req.path == "/" || req.path.rfind("/web/", 0) == 0)) return true;
+  // A CORS preflight never carries credentials; it is answered, or refused, by its origin.
+  return req.method == "OPTIONS";
+}
+
+bool HttpApi::answer_preflight(const Request& req, Response& res) const {
+  const std::string& origin = service_.settings().cors_origin;
+  if (req.method != "OPTIONS" || origin.empty() || req.get_header_value("Origin") != origin ||
+      !req.has_header("Access-Control-Request-Method"))
+    return false;
+  // Unknown paths fall through to the 404, which the browser takes as a refusal.
+  const std::string allow = allowed_methods(req.path);
+  if (allow.empty()) return false;
+  res.status = 204;
+  res.set_header("Access-Control-Allow-Methods", allow);
+  res.set_header("Access-Control-Allow-Headers", "Authorization, Content-Type, Idempotency-Key");
+  res.set_header("Access-Control-Max-Age", "600");
+  return true;
+}
+
 namespace {
 
 struct RouteInfo {
@@ -235,10 +279,12 @@ constexpr RouteInfo kRoutes[] = {
     {"GET", "/jobs", "/jobs", "your recent jobs"},
     {"POST", "/compare", "/compare", "compare two images, or a scene's render with an image"},
     {"POST", "/grade", "/grade", "grade a student's images against an assignment"},
+    {"POST", "/check", "/check", "a scene's errors and warnings, without rendering it (course=1: the course program's too)"},
     {"GET", "/samples", "/samples", "the bundled scenes"},
     {"GET", "/healthz", "/healthz", "liveness and queue figures"},
     {"GET", "/metrics", "/metrics", "Prometheus metrics"},
-    {"GET", "/", "/", "this list"},
+    {"GET", "/", "/", "this list (the web page for a browser)"},
+    {"GET", R"(/web/([A-Za-z0-9_-]+\.[a-z]+))", "/web/FILE", "the web page's scripts and styles"},
 };
 
 }  // namespace
@@ -251,7 +297,10 @@ std::string allowed_methods(const std::string& path) {
   return allow;
 }
 
-void get_index(Service&, const Request&, Response& res) {
+void get_index(Service& svc, const Request& req, Response& res) {
+  // One address for people and programs: a browser asks for HTML, curl for anything.
+  res.set_header("Vary", "Accept");
+  if (wants_page(req)) return get_page(svc, req, res);
   nlohmann::json routes = nlohmann::json::array();
   for (const RouteInfo& r : kRoutes)
     routes.push_back({{"method", r.method}, {"path", r.shown}, {"what", r.what}});
@@ -272,10 +321,12 @@ void HttpApi::routes() {
   server_.Get("/jobs", to(get_jobs));
   server_.Post("/compare", to(post_compare));
   server_.Post("/grade", to(post_grade));
+  server_.Post("/check", to(post_check));
   server_.Get("/samples", to(get_samples));
   server_.Get("/healthz", to(get_healthz));
   server_.Get("/metrics", to(get_metrics));
   server_.Get("/", to(get_index));
+  server_.Get(R"(/web/([A-Za-z0-9_-]+\.[a-z]+))", to(get_web_file));
 }
 
 int HttpApi::bind(const std::string& host, int port) {

@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <vector>
 
+#include "rayfarm/diagnostic.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/sha256.h"
 
@@ -59,6 +61,43 @@ bool send_result(Service& service, const Request& req, Response& res, const Job&
   }
   res.status = 200;
   res.set_content(*png, "image/png");
+  return true;
+}
+
+bool check_query(const Request& req, Response& res, std::string_view route,
+                 std::initializer_list<QueryParam> taken) {
+  for (const auto& [name, value] : req.params) {
+    const QueryParam* param = nullptr;
+    for (const QueryParam& p : taken)
+      if (p.name == name) param = &p;
+    std::string message;
+    if (!param) {
+      std::vector<std::string_view> names;
+      std::string list;
+      for (const QueryParam& p : taken) {
+        names.push_back(p.name);
+        list += (list.empty() ? "" : ", ") + std::string(p.name);
+      }
+      const std::string near = nearest_word(name, names);
+      message = "unknown option '" + name.substr(0, 64) + "' for " + std::string(route) +
+                (near.empty() ? "" : " (did you mean '" + near + "'?)") +
+                (list.empty() ? "; it takes no options" : "; it takes: " + list);
+    } else if (req.params.count(name) > 1) {
+      message = "'" + name + "' is given more than once";
+    } else if (param->values.size() > 0 &&
+               std::find(param->values.begin(), param->values.end(), value) ==
+                   param->values.end()) {
+      std::string list;
+      for (std::string_view v : param->values) list += (list.empty() ? "" : ", ") + std::string(v);
+      message = "'" + name + "' is '" + value.substr(0, 64) + "'; it takes " + list;
+    } else {
+      continue;
+    }
+    ApiError e = api_error(400, "invalid_option", message);
+    e.path = name.substr(0, 64);
+    send_error(res, e);
+    return false;
+  }
   return true;
 }
 

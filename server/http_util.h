@@ -29,6 +29,17 @@ void send_image(httplib::Response& res, const Image& image, bool ppm);
 bool send_result(Service& service, const httplib::Request& req, httplib::Response& res,
                  const Job& job);
 
+// A query parameter a route takes, and the values it takes (none listed: any).
+struct QueryParam {
+  std::string_view name;
+  std::initializer_list<std::string_view> values = {};
+};
+// Refuses (400 invalid_option, with the nearest name or the values taken) a query parameter
+// the route does not take, a value it does not know, or one given twice: a typo never passes
+// silently. False when it has answered.
+bool check_query(const httplib::Request& req, httplib::Response& res, std::string_view route,
+                 std::initializer_list<QueryParam> taken);
+
 // ?format=ppm, else the format the job was submitted with.
 bool wants_ppm(const httplib::Request& req, const Job& job);
 // ?NAME=1, true or yes.

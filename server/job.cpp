@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "api_error.h"
+
 namespace rayfarm::server {
 
 std::string_view to_string(JobState s) {
@@ -130,6 +132,9 @@ nlohmann::json job_status(const Job& job, int queue_position) {
   j["options"] = opts;
   // Who it belongs to, by roster name (an address or a token's digest is nobody's business).
   if (job.client.rfind("name:", 0) == 0) j["owner"] = job.client.substr(5);
+  nlohmann::json warnings = nlohmann::json::array();
+  for (const Diagnostic& d : job.warnings) warnings.push_back(diagnostic_json(d));
+  j["warnings"] = std::move(warnings);
   j["error"] = job.error.empty() ? nlohmann::json(nullptr)
                                  : nlohmann::json{{"code", job.error_code}, {"message", job.error}};
   j["links"] = {{"self", "/jobs/" + job.id},

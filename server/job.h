@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rayfarm/diagnostic.h"
 #include "rayfarm/options.h"
 #include "rayfarm/render.h"
 #include "rayfarm/scene.h"
@@ -36,6 +37,9 @@ struct Job {
   int width = 0;
   int height = 0;
   long long created_ms = 0;
+  // What `rayfarm check` would warn about (a sphere behind the eye, a light inside a sphere):
+  // a black image with no word of why is the worst answer a student can get.
+  std::vector<Diagnostic> warnings;
 
   // Everything below is guarded by mu; `changed` is notified on every update.
   mutable std::mutex mu;
@@ -66,7 +70,7 @@ struct Job {
 // byte in a scene quoted by an error message) comes out as U+FFFD.
 std::string json_text(const nlohmann::json& j);
 
-// The status document of GET /jobs/ID (SPEC §5). `queue_position` from the scheduler.
+// The status of GET /jobs/ID (docs/http-api.md#get-jobsid). `queue_position` from the scheduler.
 nlohmann::json job_status(const Job& job, int queue_position);
 
 }  // namespace rayfarm::server

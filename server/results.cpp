@@ -20,7 +20,9 @@ void Service::on_finished(Job& job, RenderJob* render) {
       state = JobState::failed;
       code = "timeout";
       message = "the job ran longer than the server's limit of " +
-                format_number(settings_.job_timeout) + " s (--job-timeout)";
+                format_number(settings_.job_timeout) +
+                " s: lower spp, max_depth or the image size, or give time_limit to stop "
+                "sampling in time";
     } else if (!job.error.empty()) {
       state = JobState::failed;
       code = job.error_code;

@@ -1,4 +1,4 @@
-// The handlers of the API's routes (SPEC §5), one function each, named after method and path;
+// The handlers of the routes (docs/http-api.md), one function each, named after method and path;
 // HttpApi binds them to their paths.
 #pragma once
 
@@ -38,9 +38,17 @@ std::map<std::string, std::string> request_fields(const httplib::Request& req,
 // routes_grade.cpp
 void post_grade(Service& svc, const httplib::Request& req, httplib::Response& res);
 
+// routes_check.cpp
+void post_check(Service& svc, const httplib::Request& req, httplib::Response& res);
+
 // http_api.cpp: GET / lists the routes; the methods a known path takes ("" when unknown).
 void get_index(Service& svc, const httplib::Request& req, httplib::Response& res);
 std::string allowed_methods(const std::string& path);
+
+// routes_web.cpp: the web page (for a request that accepts text/html) and its files.
+bool wants_page(const httplib::Request& req);
+void get_page(Service& svc, const httplib::Request& req, httplib::Response& res);
+void get_web_file(Service& svc, const httplib::Request& req, httplib::Response& res);
 
 // routes_info.cpp
 void get_samples(Service& svc, const httplib::Request& req, httplib::Response& res);

@@ -8,7 +8,8 @@ using httplib::Request;
 using httplib::Response;
 using Json = nlohmann::json;
 
-void get_samples(Service& svc, const Request&, Response& res) {
+void get_samples(Service& svc, const Request& req, Response& res) {
+  if (!check_query(req, res, "GET /samples", {})) return;
   Json list = Json::array();
   for (const Sample& s : svc.samples())
     list.push_back({{"name", s.name},
@@ -17,11 +18,13 @@ void get_samples(Service& svc, const Request&, Response& res) {
   send_json(res, 200, {{"samples", list}});
 }
 
-void get_healthz(Service& svc, const Request&, Response& res) {
+void get_healthz(Service& svc, const Request& req, Response& res) {
+  if (!check_query(req, res, "GET /healthz", {})) return;
   send_json(res, svc.shutting_down() ? 503 : 200, svc.health());
 }
 
-void get_metrics(Service& svc, const Request&, Response& res) {
+void get_metrics(Service& svc, const Request& req, Response& res) {
+  if (!check_query(req, res, "GET /metrics", {})) return;
   res.set_content(svc.metrics_text(), "text/plain; version=0.0.4");
 }
 

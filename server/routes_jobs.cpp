@@ -63,12 +63,14 @@ bool send_next_event(Service& svc, const std::shared_ptr<Job>& job, StreamState&
 }  // namespace
 
 void get_job(Service& svc, const Request& req, Response& res) {
+  if (!check_query(req, res, "GET /jobs/ID", {})) return;
   auto job = svc.find(req.matches[1]);
   if (!job) return send_error(res, 404, "not_found", "no job " + req.matches[1].str());
   send_json(res, 200, svc.status(*job));
 }
 
 void delete_job(Service& svc, const Request& req, Response& res) {
+  if (!check_query(req, res, "DELETE /jobs/ID", {})) return;
   ApiError e = svc.cancel(req.matches[1], client_of(req));
   if (e) return send_error(res, e);
   auto job = svc.find(req.matches[1]);
@@ -81,6 +83,10 @@ void delete_job(Service& svc, const Request& req, Response& res) {
 }
 
 void get_job_image(Service& svc, const Request& req, Response& res) {
+  if (!check_query(req, res, "GET /jobs/ID/image",
+                   {{"format", {"png", "ppm"}},
+                    {"partial", {"1", "0", "true", "false", "yes", "no"}}}))
+    return;
   auto job = svc.find(req.matches[1]);
   if (!job) return send_error(res, 404, "not_found", "no job " + req.matches[1].str());
   JobState state;
@@ -137,6 +143,7 @@ void get_job_events(Service& svc, const Request& req, Response& res) {
 }
 
 void get_jobs(Service& svc, const Request& req, Response& res) {
+  if (!check_query(req, res, "GET /jobs", {})) return;
   Json list = Json::array();
   for (auto& job : svc.jobs_of(client_of(req), 100)) list.push_back(svc.status(*job));
   send_json(res, 200, {{"jobs", list}});

@@ -45,7 +45,12 @@ bool answer_when_final(Service& svc, const Request& req, Response& res, Job& job
   }
   if (state == JobState::failed) {
     ApiError e;
-    e.status = code == "timeout" ? 422 : code == "storage_error" ? 503 : 500;
+    // A render that could not start was refused for what it asked (the same answer the
+    // status document gives); a crash or a lost job is the server's.
+    e.status = code == "timeout"         ? 422
+               : code == "bad_request"   ? 400
+               : code == "storage_error" ? 503
+                                         : 500;
     e.code = code.empty() ? "render_failed" : code;
     e.message = message;
     if (code == "timeout") e.limit = "job_timeout";
@@ -62,6 +67,9 @@ void post_render(Service& svc, const Request& req, Response& res) {
   std::string text;
   TextureFiles textures;
   if (req.has_param("sample")) {
+    if (!req.body.empty() || req.is_multipart_form_data())
+      return send_error(res, 400, "bad_request",
+                        "the request names a sample and also sends a body: send one or the other");
     const Sample* sample = svc.sample(req.get_param_value("sample"));
     if (!sample) {
       std::string names;

@@ -63,21 +63,33 @@ void Service::load_samples() {
     std::string name = e.path().stem().string();
     if (ext == ".json") name += ".json";
     std::string text = read_text(e.path());
+    // The description is the file's opening comment, whole: its first line alone stops
+    // mid-sentence in most scenes.
     std::string description;
     std::istringstream lines(text);
     std::string line;
     while (std::getline(lines, line)) {
-      size_t hash = line.find('#');
-      if (hash == std::string::npos) continue;
-      description = line.substr(hash + 1);
-      while (!description.empty() && description.front() == ' ') description.erase(0, 1);
-      break;
+      size_t start = line.find_first_not_of(" \t\r");
+      if (start == std::string::npos || line[start] != '#') break;
+      std::string words = line.substr(start + 1);
+      size_t first = words.find_first_not_of(" \t");
+      size_t last = words.find_last_not_of(" \t\r");
+      if (first == std::string::npos) break;
+      if (!description.empty()) description += ' ';
+      description += words.substr(first, last - first + 1);
     }
     const BundleFiles textures(dir);
     if (!load_scene(text, LoadDetail::scene, &textures).scene) continue;  // only what renders
     samples_.push_back({name, description, e.path(), std::move(textures.files)});
   }
   std::sort(samples_.begin(), samples_.end(), [](auto& a, auto& b) { return a.name < b.name; });
+  // JSON has no comments: a twin is described by its model file.
+  for (Sample& s : samples_) {
+    if (!s.description.empty() || !s.name.ends_with(".json")) continue;
+    std::string stem = s.name.substr(0, s.name.size() - 5);
+    if (const Sample* twin = sample(stem); twin && !twin->description.empty())
+      s.description = "The JSON form of '" + stem + "'. " + twin->description;
+  }
 }
 
 }  // namespace rayfarm::server

@@ -56,7 +56,7 @@ class Service {
 
   // Checks the scene and options against the format and the limits, answers from the cache
   // when it can, and otherwise queues the job; the job is on disk before this returns.
-  // `textures`: the files the scene names, by the path it writes (SPEC §5).
+  // `textures`: the files the scene names, by the path it writes (docs/http-api.md#textures).
   Submitted submit(const std::string& scene_text, const Params& options, const std::string& client,
                    const TextureFiles& textures = {});
 

@@ -4,9 +4,35 @@
 #include "rayfarm/render.h"
 
 #include <CLI/CLI.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <regex>
 #include <thread>
 
 namespace rayfarm::server {
+namespace {
+
+// The message for a bad value that came from an option's environment variable rather than
+// the command line (the user never typed --port); empty for any other error.
+std::string from_environment(const CLI::App& app, const CLI::ParseError& e, int argc,
+                             char** argv) {
+  const std::string what = e.what();
+  for (const CLI::Option* o : app.get_options()) {
+    const std::string& env = o->get_envname();
+    const char* value = env.empty() ? nullptr : std::getenv(env.c_str());
+    const std::string flag = o->get_name();
+    const bool about_it =
+        what.rfind(flag + ":", 0) == 0 || what.find(": " + flag + " = ") != std::string::npos;
+    if (!value || !about_it) continue;
+    for (int i = 1; i < argc; ++i)
+      if (std::string arg = argv[i]; arg == flag || arg.rfind(flag + "=", 0) == 0) return "";
+    std::string reason = what.rfind(flag + ": ", 0) == 0 ? what.substr(flag.size() + 2) : what;
+    return env + "='" + value + "' (from the environment) is not a valid " + flag + ": " + reason;
+  }
+  return "";
+}
+
+}  // namespace
 
 std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   Settings s;
@@ -34,7 +60,7 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
       ->check(CLI::Range(1LL, 256LL * 1024 * 1024));
   add("--max-spp", s.max_spp, "largest spp")->check(CLI::Range(1, 1 << 20));
   add("--max-depth", s.max_depth, "largest max_depth")->check(CLI::Range(0, 100000));
-  add("--max-objects", s.max_objects, "most spheres and planes in a scene")->check(CLI::Range(0, 100000000));
+  add("--max-objects", s.max_objects, "most objects in a scene (every kind counts)")->check(CLI::Range(0, 100000000));
   add("--max-lights", s.max_lights, "most lights in a scene")->check(CLI::Range(0, 1000000));
   add("--max-textures", s.max_textures, "most texture files uploaded with one scene")
       ->check(CLI::Range(0, 100000));
@@ -69,16 +95,34 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
       ->check(CLI::Range(0.0, 3600.0));
   add("--header-timeout", s.header_timeout, "seconds a client has to send a request's head")
       ->check(CLI::Range(0.1, 3600.0));
+  // An exact origin as browsers send it: a path, a trailing slash or a wildcard would never
+  // match, so they are refused at start rather than failing silently in the browser.
+  add("--cors-origin", s.cors_origin,
+      "the origin (scheme://host[:port]) whose web pages may call this API; none by default")
+      ->check([](const std::string& v) -> std::string {
+        static const std::regex origin(
+            R"(https?://([A-Za-z0-9.-]+|\[[0-9A-Fa-f:.]+\])(:[0-9]{1,5})?)");
+        if (v.empty() || std::regex_match(v, origin)) return {};
+        return "must be an origin such as https://grader.example.edu or http://localhost:3000 "
+               "(a scheme and a host, an optional port, no path)";
+      });
   bool quiet = false;
   app.add_flag("--no-access-log", quiet, "do not log each request")->envname("RAYFARM_NO_ACCESS_LOG");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (std::string env = from_environment(app, e, argc, argv); !env.empty()) {
+      std::fprintf(stderr, "rayfarmd: %s\n", env.c_str());
+      exit_code = 2;
+      return std::nullopt;
+    }
     exit_code = app.exit(e);
     if (exit_code != 0) exit_code = 2;
     return std::nullopt;
   }
   s.access_log = !quiet;
+  // Browsers send an origin in lower case.
+  for (char& c : s.cors_origin) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   RenderOptions resolved;
   apply_option(resolved, "profile", profile);
   s.default_profile = resolved.profile;

@@ -1,4 +1,4 @@
-// rayfarmd's settings: each a flag and an environment variable (SPEC §5).
+// rayfarmd's settings: each a flag and an environment variable (docs/http-api.md#limits).
 #pragma once
 
 #include <cstdint>
@@ -32,7 +32,7 @@ struct Settings {
   std::string make_tokens;  // a class list to make a roster for (printed), then exit
   Profile default_profile = Profile::lecture;  // of a request whose query and scene name none
 
-  // Beyond the spec's list, for a shared lab.
+  // For a shared lab: connections, streams, quotas, retention, folders.
   int http_threads = 64;
   int max_event_streams = 16;
   int max_waiting_requests = 32;
@@ -43,6 +43,9 @@ struct Settings {
   std::string assignments_dir;  // assignments POST /grade may name
   double shutdown_grace = 10;  // seconds running renders may finish after SIGTERM
   double header_timeout = 10;  // seconds a client has to send a request line and headers
+  // The one origin (scheme://host[:port]) whose pages may call the API from a browser (a
+  // grader hosted elsewhere); empty: no cross-origin access.
+  std::string cors_origin;
   bool access_log = true;
 };
 

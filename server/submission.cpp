@@ -5,6 +5,7 @@
 #include <random>
 
 #include "rayfarm/content_key.h"
+#include "rayfarm/lint.h"
 #include "rayfarm/load.h"
 #include "rayfarm/sha256.h"
 #include "rayfarm/writers.h"
@@ -127,6 +128,13 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
 
   auto job = new_job(client);
   job->options = options;
+  {
+    Diagnostics lints;
+    lint_scene(*scene, options, lints);
+    for (const Diagnostic& d : loaded.diags.items())
+      if (d.severity == Severity::warning) job->warnings.push_back(d);
+    for (const Diagnostic& d : lints.items()) job->warnings.push_back(d);
+  }
   job->width = width;
   job->height = height;
   // A time limit makes the result depend on the machine's speed: never shared.

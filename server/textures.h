@@ -1,4 +1,4 @@
-// Textures uploaded with a scene (SPEC §5): multipart parts named by the path the scene
+// Uploaded textures (docs/http-api.md#textures): multipart parts named by the path the scene
 // writes. The server reads textures only from these, never from its own disk: a path such as
 // `../images/brick8.ppm` or `/etc/passwd` is a key, not a file.
 #pragma once

@@ -1,18 +1,24 @@
 // The command line as its users run it: `rayfarm grade` and `compare` as a grading platform
 // does (the worked example in scenes/assignments/lab1, the lock file, a student's program
-// under --run, exit codes), and `render`'s refusals of outputs and server URLs it cannot use.
+// under --run, exit codes), `render`'s refusals of outputs and server URLs it cannot use,
+// usage errors and help, and the remote workflow against a real rayfarmd.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <unistd.h>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 #include <string>
-
-#include <nlohmann/json.hpp>
+#include <thread>
+#include <vector>
 
 namespace {
 
@@ -20,6 +26,7 @@ namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
 const std::string kRayfarm = RAYFARM_BINARY_DIR "/client/rayfarm";
+const std::string kRayfarmd = RAYFARM_BINARY_DIR "/server/rayfarmd";
 const std::string kLab = RAYFARM_SOURCE_DIR "/scenes/assignments/lab1";
 
 struct Outcome {
@@ -205,7 +212,7 @@ TEST(RenderCli, RefusesOutputsAndServersItCannotUse) {
   // A flag's bad value is a usage error, said with the flag's name.
   Outcome spp = render("-o " + out + ".png --spp 0");
   EXPECT_EQ(spp.code, 2);
-  EXPECT_EQ(spp.out.rfind("--spp: must be an integer in 1..", 0), 0u) << spp.out;
+  EXPECT_EQ(spp.out.rfind("rayfarm: --spp: must be an integer in 1..", 0), 0u) << spp.out;
   // What check would warn about, render says too (and still renders).
   const fs::path behind = fs::temp_directory_path() / "rayfarm-cli-behind.txt";
   std::ofstream(behind) << "camera c\n{ pixeldim 8 6\n  worlddim 8 6\n  viewpoint 4 3 5 }\n"
@@ -225,11 +232,392 @@ TEST(RenderCli, RefusesOutputsAndServersItCannotUse) {
   Outcome refused = render("--server http://127.0.0.1:1 -o " + out + ".png");
   EXPECT_EQ(refused.code, 3);
   EXPECT_NE(refused.out.find("is rayfarmd running there?"), std::string::npos) << refused.out;
-  // `none` renders here, whatever RAYFARM_SERVER says.
+  // `none` renders here, whatever RAYFARM_SERVER says; so does an empty --server.
   EXPECT_EQ(run("RAYFARM_SERVER=ftp://x " + kRayfarm + " render " + scene + " -q --server none -o " +
                 out + ".png").code,
             0);
+  EXPECT_EQ(run("RAYFARM_SERVER=ftp://x " + kRayfarm + " render " + scene + " -q --server '' -o " +
+                out + ".png").code,
+            0);
   fs::remove(fs::temp_directory_path() / "rayfarm-cli-out.png");
+}
+
+// Every command's words for a command line it cannot use: what is wrong in plain words, the
+// option named with the values it takes, and exit 2.
+TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
+  REQUIRE_CLIENT();
+  const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
+  auto usage = [&](const std::string& args, const std::string& expected) {
+    Outcome r = run(kRayfarm + " " + args + " 2>&1");
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_EQ(r.out.rfind("rayfarm: " + expected + "\n", 0), 0u) << args << "\n" << r.out;
+  };
+  usage("render " + scene + " --width 40 --width 50", "--width given twice; give it once");
+  usage("render " + scene + " --max_depth 3 --max-depth 4",
+        "--max-depth given twice; give it once");
+  usage("render " + scene + " --frobnicate 3", "unknown option --frobnicate");
+  usage("render " + scene + " --sp=3", "unknown option --sp (did you mean --spp?)");
+  usage("render " + scene + " extra", "unexpected argument 'extra'");
+  usage("rendr " + scene,
+        "unknown command 'rendr' (did you mean 'render'?); the commands are render, trace, check, "
+        "convert, compare, grade, report, status, cancel, wait, jobs");
+  usage("render " + scene + " --threads 2000",
+        "--threads: must be an integer in 0..1024, got '2000'");
+  usage("compare a.png b.png --threshold 300",
+        "--threshold: must be an integer in 0..255, got '300'");
+  usage("compare a.png b.png --max-bad-fraction x",
+        "--max-bad-fraction: must be a number in 0..1, got 'x'");
+  usage("render " + scene + " --background 255,0,0",
+        "--background: must be at most 1, got 255 (colours are 0..1, not 0..255)");
+  // Options a command would ignore are refused, not dropped.
+  usage("report " + scene + " --format ppm",
+        "--format: report writes report.md, report.csv and report.svg");
+  usage("report " + scene + " --spp 4",
+        "--spp: report renders a ladder of spp (1 to 64) against a reference of --reference-spp");
+  usage("trace " + scene + " 1 1 --format ppm",
+        "--format: trace prints the pixel's bytes, not an image");
+  usage("convert " + scene + " --to pov --spp 8",
+        "--to pov cannot use --spp: the POV-Ray file takes --camera, --width, --height, "
+        "--max-depth, --profile, --background and --highlight");
+  usage("render " + scene + " --detach",
+        "--detach needs a server: give --server URL or set RAYFARM_SERVER");
+  usage("render " + scene + " --detach --server http://127.0.0.1:1 -o x.png",
+        "--detach saves no image: give -o (or --format) to rayfarm wait ID");
+  // A file that cannot be read is input to fix: 2 for every command.
+  for (const char* command : {"render", "check", "convert --to json", "trace", "report"}) {
+    Outcome r = run(kRayfarm + " " + command + " /nonexistent.txt" +
+                    (std::string(command) == "trace" ? " 0 0" : "") + " 2>&1");
+    EXPECT_EQ(r.code, 2) << command << ": " << r.out;
+  }
+}
+
+TEST(UsageCli, EveryCommandsHelpHasExamplesDefaultsAndExitCodes) {
+  REQUIRE_CLIENT();
+  for (const char* command : {"render", "trace", "check", "convert", "compare", "grade", "report",
+                              "status", "cancel", "wait", "jobs"}) {
+    Outcome r = run(kRayfarm + " " + command + " --help");
+    EXPECT_EQ(r.code, 0) << command;
+    EXPECT_NE(r.out.find("Usage: rayfarm " + std::string(command)), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\nExamples:\n  rayfarm " + std::string(command)), std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("Exit codes (the same for every command):\n  0    done\n"),
+              std::string::npos)
+        << r.out;
+  }
+  Outcome render = run(kRayfarm + " render --help");
+  EXPECT_NE(render.out.find(
+                "samples per pixel (stratified jitter; 1 = the exact pixel point) (default: 1)"),
+            std::string::npos)
+      << render.out;
+  EXPECT_NE(render.out.find("colour of rays that hit nothing, each 0..1"), std::string::npos);
+  EXPECT_NE(render.out.find("  1    the server's job failed or was canceled\n"), std::string::npos);
+  // Options a command refuses are not offered.
+  EXPECT_EQ(run(kRayfarm + " report --help").out.find("--spp"), std::string::npos);
+  Outcome top = run(kRayfarm + " --help");
+  EXPECT_NE(top.out.find("RAYFARM_TOKEN"), std::string::npos) << top.out;
+  EXPECT_NE(top.out.find("  1    the answer is no: check found errors"), std::string::npos);
+}
+
+TEST(CheckCli, ErrorsComeInLineOrderWithACount) {
+  REQUIRE_CLIENT();
+  const fs::path bad =
+      fs::temp_directory_path() / ("rayfarm-cli-check-" + std::to_string(getpid()) + ".txt");
+  std::ofstream(bad) << "camera c\n{ pixeldim 8 6\n  worlddim 8 6\n  viewpoint 4 3 5 }\n"
+                        "material m\n{ diffuse 1 1 1 }\nlight l\n{ location 4 3 2 }\n"
+                        "sphere s\n{ material mm\n  center 4 3 -2\n  radious 1 }\n"
+                        "plane p\n{ material m\n  normal 0 0 1\n  pont 0 0 -5\n}\n";
+  for (const std::string flags : {"", " --course"}) {
+    Outcome r = run(kRayfarm + " check" + flags + " " + q(bad.string()) + " 2>&1");
+    EXPECT_EQ(r.code, 1) << r.out;
+    std::vector<int> lines;
+    const std::regex at(bad.filename().string() + ":(\\d+):\\d+: (error|warning)");
+    for (std::sregex_iterator it(r.out.begin(), r.out.end(), at), end; it != end; ++it)
+      lines.push_back(std::stoi((*it)[1]));
+    EXPECT_GE(lines.size(), 3u) << r.out;
+    EXPECT_TRUE(std::is_sorted(lines.begin(), lines.end())) << r.out;
+    const std::string summary =
+        bad.string() + (flags.empty() ? ": 3 errors, 0 warnings\n" : ": 3 errors, 4 warnings\n");
+    EXPECT_NE(r.out.find(summary), std::string::npos) << r.out;
+  }
+  // Several files: a total; a missing one is trouble (2), which outranks errors (1).
+  Outcome two = run(kRayfarm + " check " + q(bad.string()) + " " +
+                    q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt") + " /nonexistent.txt 2>&1");
+  EXPECT_EQ(two.code, 2) << two.out;
+  EXPECT_NE(two.out.find("3 files: 3 errors, 0 warnings\n"), std::string::npos) << two.out;
+  fs::remove(bad);
+}
+
+TEST(ReportCli, TheSppLadderStopsBelowTheReference) {
+  REQUIRE_CLIENT();
+  const fs::path out =
+      fs::temp_directory_path() / ("rayfarm-cli-report-" + std::to_string(getpid()));
+  Outcome r = run(kRayfarm + " report " + q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt") +
+                  " -q --runs 1 --max-pixels 200 --reference-spp 16 --out " + q(out.string()) +
+                  " 2>&1 >/dev/null");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(
+      r.out.find("rayfarm: note: the spp ladder stops below --reference-spp 16: spp 1, 2, 4, 8\n"),
+      std::string::npos)
+      << r.out;
+  std::ifstream csv(out / "report.csv");
+  std::string header, line;
+  std::getline(csv, header);
+  const auto columns = [](const std::string& l) {
+    std::vector<std::string> cells;
+    std::stringstream ss(l);
+    for (std::string cell; std::getline(ss, cell, ',');) cells.push_back(cell);
+    return cells;
+  };
+  const std::vector<std::string> names = columns(header);
+  const size_t sweep = std::find(names.begin(), names.end(), "sweep") - names.begin();
+  const size_t spp = std::find(names.begin(), names.end(), "spp") - names.begin();
+  ASSERT_LT(spp, names.size()) << header;
+  int spp_rows = 0;
+  while (std::getline(csv, line)) {
+    const auto cells = columns(line);
+    if (sweep < names.size() && cells.at(sweep) != "spp") continue;
+    ++spp_rows;
+    EXPECT_LT(std::stoi(cells.at(spp)), 16) << line;
+  }
+  EXPECT_GT(spp_rows, 0);
+  fs::remove_all(out);
+}
+
+TEST(RayfarmdCli, ABadValueFromTheEnvironmentNamesTheVariable) {
+  if (!fs::exists(kRayfarmd)) GTEST_SKIP() << "no " << kRayfarmd << " in this build";
+  Outcome env = run("RAYFARM_PORT=abc " + kRayfarmd + " 2>&1");
+  EXPECT_EQ(env.code, 2);
+  EXPECT_EQ(env.out.rfind(
+                "rayfarmd: RAYFARM_PORT='abc' (from the environment) is not a valid --port: ", 0),
+            0u)
+      << env.out;
+  // Given on the command line, it is the flag's error, whatever the environment says.
+  Outcome flag = run("RAYFARM_PORT=abc " + kRayfarmd + " --port abc 2>&1");
+  EXPECT_EQ(flag.code, 2);
+  EXPECT_EQ(flag.out.find("RAYFARM_PORT"), std::string::npos) << flag.out;
+}
+
+// A real rayfarmd, started as its users start it, on a free loopback port; its access log in
+// a file. Stopped with SIGTERM.
+class Rayfarmd {
+ public:
+  explicit Rayfarmd(const std::string& flags) {
+    static int count = 0;
+    log_ = fs::temp_directory_path() / ("rayfarm-cli-rayfarmd-" + std::to_string(getpid()) + "-" +
+                                        std::to_string(++count) + ".log");
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int fd = open(log_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      dup2(fd, 1);
+      dup2(fd, 2);
+      const std::string command =
+          "exec " + kRayfarmd + " --host 127.0.0.1 --port 0 --workers 2 " + flags;
+      execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    const std::regex listening("listening on (http://127\\.0\\.0\\.1:\\d+)");
+    for (int i = 0; i < 200 && url_.empty(); ++i) {
+      std::smatch m;
+      const std::string text = log();
+      if (std::regex_search(text, m, listening))
+        url_ = m[1];
+      else
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  ~Rayfarmd() {
+    if (pid_ > 0) {
+      kill(pid_, SIGTERM);
+      waitpid(pid_, nullptr, 0);
+    }
+    fs::remove(log_);
+  }
+  const std::string& url() const { return url_; }
+  std::string log() const {
+    std::ifstream in(log_);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  // Requests of the access log for this path exactly ("GET /jobs/ID 200 ..."), waiting a
+  // little for `at_least` of them: a streamed answer is logged once it has been sent.
+  int requests(const std::string& method, const std::string& path, int at_least = 0) const {
+    const std::string needle = " " + method + " " + path + " ";
+    int n = 0;
+    for (int tries = 0; tries < 40; ++tries) {
+      const std::string text = log();
+      n = 0;
+      for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1))
+        ++n;
+      if (n >= at_least) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return n;
+  }
+
+ private:
+  pid_t pid_ = -1;
+  fs::path log_;
+  std::string url_;
+};
+
+#define REQUIRE_SERVER() \
+  REQUIRE_CLIENT();      \
+  if (!fs::exists(kRayfarmd)) GTEST_SKIP() << "no " << kRayfarmd << " in this build"
+
+class RemoteCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("rayfarm-remote-cli-" + std::to_string(getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string out(const std::string& name) const { return q((dir_ / name).string()); }
+
+  fs::path dir_;
+  const std::string scene_ = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
+};
+
+bool is_png(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char magic[8] = {};
+  in.read(magic, 8);
+  return std::string(magic + 1, 3) == "PNG";
+}
+
+TEST_F(RemoteCli, DetachPrintsTheIdThatJobsStatusAndWaitTakeUp) {
+  REQUIRE_SERVER();
+  Rayfarmd server("");
+  ASSERT_FALSE(server.url().empty()) << server.log();
+  const std::string at = " --server " + server.url();
+  Outcome detached = run(kRayfarm + " render " + scene_ + " --spp 2 --detach" + at);
+  ASSERT_EQ(detached.code, 0);
+  ASSERT_TRUE(std::regex_match(detached.out, std::regex("[0-9a-f]{32}\n"))) << detached.out;
+  const std::string id = detached.out.substr(0, 32);
+  // Detached: submitted, nothing followed or fetched.
+  EXPECT_EQ(server.requests("GET", "/jobs/" + id + "/events"), 0);
+  EXPECT_EQ(server.requests("GET", "/jobs/" + id + "/image"), 0);
+
+  Outcome jobs = run(kRayfarm + " jobs" + at);
+  EXPECT_EQ(jobs.code, 0);
+  EXPECT_EQ(jobs.out.rfind("ID", 0), 0u) << jobs.out;
+  EXPECT_NE(jobs.out.find(id), std::string::npos) << jobs.out;
+  EXPECT_NE(jobs.out.find("400x300"), std::string::npos) << jobs.out;
+
+  Outcome waited = run(kRayfarm + " wait " + id + " -o " + out("w.png") + at + " 2>&1");
+  EXPECT_EQ(waited.code, 0) << waited.out;
+  EXPECT_TRUE(is_png(dir_ / "w.png"));
+  EXPECT_NE(waited.out.find("w.png: 400x300, spp 2, "), std::string::npos) << waited.out;
+
+  Outcome status = run(kRayfarm + " status " + id + at);
+  EXPECT_EQ(status.code, 0);
+  EXPECT_NE(status.out.find("job       " + id + "\nstate     done"), std::string::npos)
+      << status.out;
+  EXPECT_NE(status.out.find("image     400x300, spp 2"), std::string::npos) << status.out;
+  Json raw = Json::parse(run(kRayfarm + " status --json " + id + at).out);
+  EXPECT_EQ(raw["id"], id);
+  EXPECT_EQ(raw["state"], "done");
+  Json listed = Json::parse(run(kRayfarm + " jobs --json" + at).out);
+  EXPECT_EQ(listed["jobs"][0]["id"], id);
+
+  // An ID the server does not know is the user's to fix.
+  Outcome unknown = run(kRayfarm + " status " + std::string(32, '0') + at + " 2>&1");
+  EXPECT_EQ(unknown.code, 2) << unknown.out;
+}
+
+TEST_F(RemoteCli, RenderFollowsTheEventStreamAndSaysWhenCached) {
+  REQUIRE_SERVER();
+  Rayfarmd server("");
+  ASSERT_FALSE(server.url().empty()) << server.log();
+  const std::string at = " --server " + server.url();
+  Outcome first =
+      run(kRayfarm + " render " + scene_ + " --spp 4 -o " + out("a.png") + at + " 2>&1");
+  ASSERT_EQ(first.code, 0) << first.out;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(first.out, m, std::regex("rayfarm: job ([0-9a-f]{32}) on ")))
+      << first.out;
+  const std::string id = m[1];
+  EXPECT_NE(first.out.find("a.png: 400x300, spp 4, "), std::string::npos) << first.out;
+  EXPECT_NE(first.out.find("Mrays/s (job " + id + ")"), std::string::npos) << first.out;
+  EXPECT_EQ(server.requests("GET", "/jobs/" + id + "/events", 1), 1) << server.log();
+  EXPECT_EQ(server.requests("GET", "/jobs/" + id), 0) << server.log();  // no polling
+  // The same render again comes from the server's cache, and says so.
+  Outcome again =
+      run(kRayfarm + " render " + scene_ + " --spp 4 -o " + out("b.png") + at + " 2>&1");
+  ASSERT_EQ(again.code, 0) << again.out;
+  EXPECT_NE(again.out.find("b.png: 400x300, spp 4, cached on " + server.url()), std::string::npos)
+      << again.out;
+}
+
+TEST_F(RemoteCli, WithoutEventStreamsItPolls) {
+  REQUIRE_SERVER();
+  Rayfarmd server("--max-event-streams 0");
+  ASSERT_FALSE(server.url().empty()) << server.log();
+  Outcome r = run(kRayfarm + " render " + scene_ + " -o " + out("p.png") + " --server " +
+                  server.url() + " 2>&1");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_TRUE(is_png(dir_ / "p.png"));
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex("rayfarm: job ([0-9a-f]{32}) on "))) << r.out;
+  EXPECT_GE(server.requests("GET", "/jobs/" + std::string(m[1]), 1), 1) << server.log();
+}
+
+TEST_F(RemoteCli, ExitCodesSayWhoseTroubleItIs) {
+  REQUIRE_SERVER();
+  Rayfarmd server("--token sesame --job-timeout 0.001");
+  ASSERT_FALSE(server.url().empty()) << server.log();
+  const std::string at = " --server " + server.url();
+  // No token: the user's to fix, and the message says how.
+  Outcome refused = run("RAYFARM_TOKEN= " + kRayfarm + " render " + scene_ + " -o " + out("x.png") +
+                        at + " 2>&1");
+  EXPECT_EQ(refused.code, 2) << refused.out;
+  EXPECT_NE(refused.out.find("give your token with --token TOKEN or in RAYFARM_TOKEN"),
+            std::string::npos)
+      << refused.out;
+  // A job that ran and failed (here: past the server's time limit) is a "no": 1.
+  Outcome failed =
+      run("RAYFARM_TOKEN=sesame " + kRayfarm + " render " +
+          q(RAYFARM_SOURCE_DIR "/scenes/cho.txt") + " --spp 64 -o " + out("y.png") + at + " 2>&1");
+  EXPECT_EQ(failed.code, 1) << failed.out;
+  EXPECT_NE(failed.out.find(" failed: "), std::string::npos) << failed.out;
+  EXPECT_FALSE(fs::exists(dir_ / "y.png"));
+}
+
+// docs/cli.md keeps up with --help: every option a command offers is in its section, and every
+// render option in the table of render options.
+TEST(DocsCli, EveryOptionOfEveryCommandIsDocumented) {
+  REQUIRE_CLIENT();
+  std::ifstream in(RAYFARM_SOURCE_DIR "/docs/cli.md");
+  const std::string doc((std::istreambuf_iterator<char>(in)), {});
+  ASSERT_FALSE(doc.empty());
+  auto section = [&](const std::string& heading) {
+    const size_t at = doc.find("\n## " + heading + "\n");
+    if (at == std::string::npos) return std::string();
+    return doc.substr(at, doc.find("\n## ", at + 1) - at);
+  };
+  const std::string render_options = section("Render options");
+  ASSERT_FALSE(render_options.empty());
+  const std::regex flag("--[a-z][a-z0-9_-]*");
+  for (const char* command : {"render", "trace", "check", "convert", "compare", "grade", "report",
+                              "status", "cancel", "wait", "jobs"}) {
+    const std::string help = run(kRayfarm + " " + command + " --help").out;
+    const std::string own = section("`rayfarm " + std::string(command) + "`");
+    EXPECT_FALSE(own.empty()) << command;
+    const size_t options = help.find("\nOptions:\n");
+    const size_t render = help.find("\nRender options:\n");
+    const size_t end = help.find("\nExamples:\n");
+    ASSERT_NE(options, std::string::npos) << help;
+    auto each_flag = [&](size_t from, size_t to, const std::string& where, const std::string& text) {
+      const std::string part = help.substr(from, to - from);
+      for (std::sregex_iterator it(part.begin(), part.end(), flag), e; it != e; ++it) {
+        const std::string name = it->str();
+        if (name == "--help" || name.find('_') != std::string::npos) continue;
+        EXPECT_NE(text.find("`" + name), std::string::npos)
+            << name << " of rayfarm " << command << " is not in " << where;
+      }
+    };
+    each_flag(options, render != std::string::npos ? render : end,
+              "the section of rayfarm " + std::string(command), own);
+    if (render != std::string::npos) each_flag(render, end, "Render options", render_options);
+  }
 }
 
 }  // namespace

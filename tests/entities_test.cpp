@@ -1,6 +1,6 @@
 // The kinds the lecture profile gained beyond spheres and planes (fplane, tiled_plane,
 // texplane, triangle, tri, revsurf, spotlight, projector, transparency) on tiny scenes
-// whose bytes are worked out by hand from SPEC §3's equation and each kind's rule, in long
+// whose bytes are worked out by hand from docs/rendering.md#shading and each kind's rule, in long
 // double here, independently of the tracer. The lecture's colour at a hit R from the eye:
 // ambient/R + Σ E/r (diffuse N·L), clamped, then floor(255c + 0.5).
 #include <cmath>
@@ -64,7 +64,7 @@ TEST(Fplane, IsLitFromTheSideItIsSeenFrom) {
 // tiled_plane
 
 TEST(TiledPlane, OddSquaresUseTheMaterialEvenSquaresTheAltmaterial) {
-  // COURSE §3's parity on the frame coordinates of the hit itself (2x − 1, 2y − 1): with
+  // docs/profiles.md §3's parity on the frame coordinates of the hit itself (2x − 1, 2y − 1): with
   // 2×2 tiles the square index is 9999 + x plus 9999 + y, odd (the material) when x + y is.
   // Both ambient and diffuse switch. Light at the eye: r = d, N·L = 10/d.
   const Scene s = scene_from(kCamera + R"(

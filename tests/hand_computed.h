@@ -91,7 +91,7 @@ inline FloorHit floor_hit(int x, int y) {
   return {1 + s * (x - 1), 5 - 5 * s, s * len};
 }
 
-// Whether COURSE §3's 2009 rule puts the plane's own material (the foreground) on the square
+// Whether docs/profiles.md §3's 2009 rule puts the plane's own material (the foreground) on the square
 // of (px, pz): (int)((x + 10000)/w) + (int)((z + 10000)/h) even. Rows y = 0, 1, 2 of
 // kFloor2009 give alt-m-alt, m-alt-m, m-m-m: z decides as much as x.
 inline bool foreground_2009(L px, L pz) {

@@ -1,4 +1,4 @@
-// The JSON scene format (SPEC §2): the same scene as the model file, errors by JSON path,
+// The JSON scene format (docs/json-format.md): the same scene as a model file, errors by JSON path,
 // syntax errors by line and column, render options, and hostile input.
 #include "rayfarm/json_scene.h"
 

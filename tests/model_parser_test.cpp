@@ -1,4 +1,4 @@
-// The model-file parser and scene builder (SPEC §1): every error with its exact position and
+// The model-file parser and builder (docs/model-format.md): every error with its exact position and
 // message, no cascades, the lexical corner cases, and hostile input.
 #include "rayfarm/model_parser.h"
 
@@ -267,6 +267,13 @@ TEST(ModelParser, ReportsEveryKindOfNonNumberAtItsToken) {
       {"--1", "expected a decimal number"},
       {"abc", "expected a decimal number"},
       {"1;5", "unexpected characters after the number"},
+      // Pasted from a document: the character is named, since a terminal shows a space.
+      {"1\xC2\xA0" "0", "unexpected character U+00A0 (a no-break space) after the number: "
+                        "numbers are separated by plain spaces"},
+      {"2\xE2\x88\x92" "1", "unexpected character U+2212 (a minus sign; write '-') after the "
+                          "number: numbers are separated by plain spaces"},
+      {"3\xE2\x82\xAC", "unexpected character U+20AC after the number: numbers are separated "
+                        "by plain spaces"},
   };
   for (const BadNumber& c : cases) {
     SCOPED_TRACE(c.token);
@@ -277,10 +284,28 @@ TEST(ModelParser, ReportsEveryKindOfNonNumberAtItsToken) {
   }
 }
 
+TEST(ModelParser, HintsAtADecimalComma) {
+  std::string line = "sphere s { material m center 0 0 -5 radius 1,5 }";
+  Diagnostic d = single_error(line + "\n");
+  EXPECT_TRUE(is_diag(d, "value-count", 3, column_of(line, "5 }"),
+                      "'radius' takes 1 number > 0, got 2 values (a comma separates numbers: if "
+                      "'1,5' is one number, write it with a decimal point)"));
+  // Vectors may be written with commas: a count that is right needs no hint.
+  std::string vector = "sphere s { material m center 0,0,-5 radius 1 }";
+  LoadedScene loaded = load_scene(with_head(vector + "\n"));
+  EXPECT_TRUE(errors_of(loaded.diags).empty()) << dump(loaded.diags);
+}
+
 TEST(ModelParser, ReportsAWordAmongTheNumbersOnce) {
   std::string line = "sphere s { material m center 0 zero -5 radius 1 }";
   Diagnostic d = single_error(line + "\n");
   EXPECT_TRUE(is_diag(d, "not-a-number", 3, column_of(line, "zero"), "'zero' is not a number"));
+}
+
+TEST(ParseNumber, NamesNoCharacterForACutOffSequence) {
+  std::string why;
+  EXPECT_FALSE(parse_number("4\xE2\x82", &why));
+  EXPECT_EQ(why, "unexpected characters after the number");
 }
 
 TEST(ParseNumber, AcceptsEveryDecimalForm) {

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 namespace rayfarm {
@@ -163,6 +165,18 @@ TEST(Options, AProfilesDefaultsGivenExplicitlyShareItsCacheKey) {
   EXPECT_NE(canonical_string({}).find("max_dist=unlimited;"), std::string::npos);
 }
 
+// Colours are 0..1: 255 is the usual slip, refused rather than clamped to white.
+TEST(Options, ABackgroundAboveOneIsRefusedWithAHint) {
+  RenderOptions o;
+  EXPECT_EQ(apply_option(o, "background", "255,0,0"),
+            "must be at most 1, got 255 (colours are 0..1, not 0..255)");
+  EXPECT_EQ(apply_option(o, "background", "1.5"),
+            "must be at most 1, got 1.5 (colours are 0..1, not 0..255)");
+  EXPECT_EQ(o.background, (std::array<double, 3>{0, 0, 0}));
+  EXPECT_EQ(apply_option(o, "background", "1,0.5,0"), std::nullopt);
+  EXPECT_EQ(o.background, (std::array<double, 3>{1, 0.5, 0}));
+}
+
 TEST(Options, UnknownNamesAreErrors) {
   RenderOptions o;
   EXPECT_EQ(apply_option(o, "profiel", "lecture"), "unknown option 'profiel'");
@@ -174,4 +188,18 @@ TEST(Options, UnknownNamesAreErrors) {
 }
 
 }  // namespace
+TEST(Options, TheDocumentedTableHasEveryOptionWithItsValuesAndCacheKey) {
+  // docs/rendering.md is where users look the options up: its table must follow this one.
+  std::ifstream in(RAYFARM_SOURCE_DIR "/docs/rendering.md");
+  const std::string doc(std::istreambuf_iterator<char>(in), {});
+  ASSERT_FALSE(doc.empty());
+  for (const OptionSpec& spec : option_specs()) {
+    const std::string row_start = "| `" + std::string(spec.name) + "` | ";
+    const size_t row = doc.find(row_start);
+    ASSERT_NE(row, std::string::npos) << spec.name << " has no row in docs/rendering.md";
+    const std::string line = doc.substr(row, doc.find('\n', row) - row);
+    EXPECT_TRUE(line.ends_with(spec.affects_pixels ? "| yes |" : "| no |")) << line;
+  }
+}
+
 }  // namespace rayfarm

@@ -1,4 +1,4 @@
-// The cpsc102 profile (COURSE.md) on tiny scenes whose bytes are worked out by hand from the
+// The cpsc102 profile (docs/profiles.md) on tiny scenes whose bytes are worked out by hand from the
 // course's rules, in long double here, independently of the reference tracer. Where a rule
 // differs from the lecture profile, the lecture's byte is asserted beside it.
 #include <cmath>
@@ -172,7 +172,7 @@ TEST(Cpsc102, MaxDistOptionReplacesTwenty) {
 }
 
 TEST(Cpsc102, GlintOfAReflectedRayLooksFromTheMirrorsStaleHitPoint) {
-  // COURSE §8. The centre ray meets a small tilted mirror (an fplane) at (1, 1, −7) and goes
+  // docs/profiles.md §8. The centre ray meets a small tilted mirror (an fplane) at (1, 1, −7) and goes
   // on along −x to a shiny wall x = −3, 16 from the eye. The light (0, 1, −9) is seen from
   // there along L = (3, 0, −2)/√13. Its shadow ray crosses the mirror's plane at
   // (−0.6, 1, −8.6), outside its window: no shadow, but the mirror's hit test stored that
@@ -296,7 +296,7 @@ TEST(Cpsc102, FplaneIncludesItsFarEdge) {
 }
 
 TEST(Cpsc102, TriangleIsHitInsideAndOnItsEdgesInEitherWinding) {
-  // COURSE §11's chosen rule. The triangle (1, −3), (1, 5), (4, 1) on the wall: the middle
+  // docs/profiles.md §11's chosen rule. The triangle (1, −3), (1, 5), (4, 1) on the wall: the middle
   // column lies on its edge x = 1 exactly, (2, 1) meets (3, 1) inside, (2, 0) and (2, 2)
   // meet (3, ∓1), 2/3 outside the slanted edges. Both windings: the inside's edge signs
   // are one way or the other.

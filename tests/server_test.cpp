@@ -1,6 +1,6 @@
 // rayfarmd in-process: the real Service and HttpApi on a free loopback port, driven by
-// httplib::Client for the API of SPEC §5 and by raw socket bytes for the cpp-httplib 0.11.4
-// weaknesses the server closes (NOTES.md), so each stays closed.
+// httplib::Client for the API (docs/http-api.md) and by raw socket bytes for the cpp-httplib 0.11.4
+// weaknesses the server closes (docs/reliability.md), so each stays closed.
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -22,6 +22,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <regex>
 #include <set>
 #include <string>
 #include <thread>
@@ -423,6 +424,13 @@ TEST(ServerRender, BundledSampleRendersByName) {
   EXPECT_EQ(unknown->status, 404);
   EXPECT_EQ(error_of(unknown)["code"], "unknown_sample");
   EXPECT_NE(error_of(unknown)["message"].get<std::string>().find("cho"), std::string::npos);
+
+  // A sample and a scene of one's own: which was meant? Neither is silently dropped.
+  auto both = c->Post("/render?sample=cho", kScene, "text/plain");
+  ASSERT_TRUE(both);
+  EXPECT_EQ(both->status, 400);
+  EXPECT_NE(error_of(both)["message"].get<std::string>().find("one or the other"),
+            std::string::npos);
 }
 
 TEST(ServerRender, EmptyBodyIs400) {
@@ -1247,6 +1255,17 @@ TEST(ServerCompare, DifferentSizesAre422) {
   auto r = c->Post("/compare", items);
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 422);
+  EXPECT_EQ(error_of(r)["message"], "image sizes differ: a is 10x10, b is 10x11");
+
+  // Against a scene, the message says which size is the render's and how to match the image.
+  httplib::MultipartFormDataItems scene = {{"scene", kScene, "scene.txt", "text/plain"},
+                                           {"image", png_bytes(gradient(10, 11)), "s.png", "image/png"}};
+  auto sized = c->Post("/compare", scene);
+  ASSERT_TRUE(sized);
+  EXPECT_EQ(sized->status, 422);
+  const std::string message = error_of(sized)["message"];
+  EXPECT_NE(message.find("the image is 10x11"), std::string::npos) << message;
+  EXPECT_NE(message.find("width=10&height=11"), std::string::npos) << message;
   httplib::MultipartFormDataItems junk = {{"a", "not an image", "a.png", "image/png"},
                                           {"b", png_bytes(gradient(10, 10)), "b.png", "image/png"}};
   auto bad = c->Post("/compare", junk);
@@ -1514,6 +1533,14 @@ TEST(ServerCompare, DiffAnswersAPng) {
   ASSERT_EQ(r->status, 200);
   EXPECT_EQ(r->get_header_value("Content-Type"), "image/png");
   EXPECT_EQ(decode_or_fail(r->body), diff_image(a, b, {}));
+  // The figures come with the heat map, as headers: one request, not two.
+  EXPECT_EQ(r->get_header_value("X-Compare-Differing-Pixels"), "1");
+  EXPECT_EQ(r->get_header_value("X-Compare-Max-Abs"), "50");
+  EXPECT_EQ(r->get_header_value("X-Compare-Identical"), "false");
+  EXPECT_EQ(r->get_header_value("X-Compare-Match"), "false");
+  auto json = c->Post("/compare", items);
+  ASSERT_TRUE(json);
+  EXPECT_EQ(r->get_header_value("X-Compare-Rmse"), json_of(json)["rmse"].dump());
 }
 
 // ---- Textures uploaded with the scene ----------------------------------------------------
@@ -1924,6 +1951,16 @@ TEST(ServerInfo, SamplesListsTheBundledScenes) {
       EXPECT_FALSE(s["description"].get<std::string>().empty());
     }
   EXPECT_TRUE(found) << r->body;
+  // Each description is the scene's whole opening comment, and a JSON twin borrows its
+  // model file's.
+  for (const Json& s : list["samples"]) {
+    const std::string d = s["description"];
+    EXPECT_FALSE(d.empty()) << s["name"];
+    EXPECT_TRUE(d.ends_with(".") || d.ends_with(")")) << s["name"] << ": " << d;
+    if (s["name"] == "cho.json") {
+      EXPECT_EQ(d.rfind("The JSON form of 'cho'. ", 0), 0u) << d;
+    }
+  }
 }
 
 TEST(ServerInfo, HealthzReportsQueueFigures) {
@@ -2004,6 +2041,209 @@ TEST(ServerAuth, ConfiguredTokensAreRequired) {
   EXPECT_EQ(code_of(none->Get("/jobs/" + id)), 401);
   EXPECT_EQ(code_of(none->Get("/healthz")), 200);
   EXPECT_EQ(code_of(server.client("other")->Get("/jobs")), 200);
+}
+
+// ---- The web page and cross-origin access -------------------------------------------------
+
+const httplib::Headers kBrowser = {{"Accept", "text/html,application/xhtml+xml,*/*;q=0.8"}};
+
+// The files a page or script names: src="/web/x", href="/web/x" and `from './x.js'`.
+std::set<std::string> web_references(const std::string& text) {
+  std::set<std::string> names;
+  static const std::regex ref(R"re((?:src|href)="/web/([^"]+)"|from '\./([^']+)')re");
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), ref); it != std::sregex_iterator(); ++it)
+    names.insert((*it)[1].matched ? (*it)[1].str() : (*it)[2].str());
+  return names;
+}
+
+TEST(ServerWeb, BrowsersGetThePageAndOtherClientsTheRouteIndex) {
+  TestServer server;
+  auto c = server.client();
+  auto page = c->Get("/", kBrowser);
+  ASSERT_TRUE(page);
+  ASSERT_EQ(page->status, 200);
+  EXPECT_EQ(page->get_header_value("Content-Type"), "text/html; charset=utf-8");
+  const std::string csp = page->get_header_value("Content-Security-Policy");
+  EXPECT_NE(csp.find("default-src 'self'"), std::string::npos) << csp;
+  EXPECT_NE(csp.find("img-src 'self' blob: data:"), std::string::npos) << csp;
+  EXPECT_EQ(csp.find("unsafe-inline"), std::string::npos) << csp;
+  EXPECT_EQ(page->get_header_value("Vary"), "Accept");
+  EXPECT_NE(page->body.find("<label for=\"scene\">Scene</label>"), std::string::npos);
+  // Nothing leaves the server's origin: no absolute URL in the page's markup.
+  EXPECT_EQ(page->body.find("http://"), std::string::npos);
+  EXPECT_EQ(page->body.find("https://"), std::string::npos);
+
+  auto index = c->Get("/");
+  ASSERT_TRUE(index);
+  EXPECT_EQ(index->get_header_value("Content-Type"), "application/json");
+  EXPECT_EQ(index->get_header_value("Vary"), "Accept");
+  Json routes = json_of(index)["routes"];
+  ASSERT_TRUE(routes.is_array());
+  EXPECT_GE(routes.size(), 10u);
+}
+
+TEST(ServerWeb, EveryFileThePageNamesIsServedWithItsTypeAndRevalidates) {
+  TestServer server;
+  auto c = server.client();
+  auto page = c->Get("/", kBrowser);
+  ASSERT_TRUE(page);
+  // Follow the page's references and each script's imports: a file left out of the build's
+  // list (server/CMakeLists.txt) would break the page in the browser.
+  std::set<std::string> todo = web_references(page->body), done;
+  ASSERT_TRUE(todo.count("main.js") && todo.count("style.css"));
+  while (!todo.empty()) {
+    const std::string name = *todo.begin();
+    todo.erase(todo.begin());
+    if (!done.insert(name).second) continue;
+    auto r = c->Get("/web/" + name);
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200) << name;
+    const bool js = name.size() > 3 && name.compare(name.size() - 3, 3, ".js") == 0;
+    EXPECT_EQ(r->get_header_value("Content-Type"),
+              js ? "text/javascript; charset=utf-8" : "text/css; charset=utf-8") << name;
+    EXPECT_EQ(r->get_header_value("X-Content-Type-Options"), "nosniff");
+    EXPECT_EQ(r->body.find("http://"), std::string::npos) << name;
+    EXPECT_EQ(r->body.find("https://"), std::string::npos) << name;
+    const std::string etag = r->get_header_value("ETag");
+    ASSERT_FALSE(etag.empty()) << name;
+    auto again = c->Get("/web/" + name, {{"If-None-Match", etag}});
+    ASSERT_TRUE(again);
+    EXPECT_EQ(again->status, 304) << name;
+    EXPECT_TRUE(again->body.empty());
+    for (const std::string& more : web_references(r->body)) todo.insert(more);
+  }
+  EXPECT_GE(done.size(), 8u);
+  auto missing = c->Get("/web/nope.js");
+  ASSERT_TRUE(missing);
+  EXPECT_EQ(missing->status, 404);
+  EXPECT_EQ(error_of(missing)["code"], "not_found");
+  auto post = c->Post("/web/main.js", "", "text/plain");
+  ASSERT_TRUE(post);
+  EXPECT_EQ(post->status, 405);
+  EXPECT_EQ(post->get_header_value("Allow"), "GET");
+}
+
+TEST(ServerWeb, ThePageLoadsWithoutATokenAndTheApiStillNeedsOne) {
+  Settings s = test_settings();
+  s.tokens = {"s3cret"};
+  TestServer server(s);
+  auto none = server.client();
+  EXPECT_EQ(code_of(none->Get("/", kBrowser)), 200);
+  EXPECT_EQ(code_of(none->Get("/web/main.js")), 200);
+  EXPECT_EQ(code_of(none->Get("/web/nope.js")), 404);
+  EXPECT_EQ(code_of(none->Get("/jobs")), 401);
+  EXPECT_EQ(code_of(none->Post("/render", kScene, "text/plain")), 401);
+  // The open paths are exactly these: a look-alike path is not.
+  EXPECT_EQ(code_of(none->Get("/web")), 401);
+  EXPECT_EQ(code_of(none->Get("/webx/main.js")), 401);
+  EXPECT_EQ(code_of(server.client("s3cret")->Get("/jobs")), 200);
+}
+
+TEST(ServerCors, OffByDefault) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Get("/healthz", {{"Origin", "https://grader.example.edu"}});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_FALSE(r->has_header("Access-Control-Allow-Origin"));
+  auto pre = c->Options("/render", {{"Origin", "https://grader.example.edu"},
+                                    {"Access-Control-Request-Method", "POST"}});
+  ASSERT_TRUE(pre);
+  EXPECT_EQ(pre->status, 405);
+  EXPECT_FALSE(pre->has_header("Access-Control-Allow-Origin"));
+  EXPECT_FALSE(pre->has_header("Access-Control-Allow-Methods"));
+}
+
+TEST(ServerCors, OnlyTheConfiguredOriginMayCallTheApiWithItsToken) {
+  const std::string origin = "https://grader.example.edu";
+  Settings s = test_settings();
+  s.tokens = {"s3cret"};
+  s.cors_origin = origin;
+  TestServer server(s);
+  auto none = server.client();
+  // The preflight carries no token and is answered for the configured origin only.
+  auto pre = none->Options("/render", {{"Origin", origin},
+                                       {"Access-Control-Request-Method", "POST"},
+                                       {"Access-Control-Request-Headers", "authorization,content-type"}});
+  ASSERT_TRUE(pre);
+  EXPECT_EQ(pre->status, 204);
+  EXPECT_EQ(pre->get_header_value("Access-Control-Allow-Origin"), origin);
+  EXPECT_EQ(pre->get_header_value("Access-Control-Allow-Methods"), "POST");
+  EXPECT_EQ(pre->get_header_value("Access-Control-Allow-Headers"),
+            "Authorization, Content-Type, Idempotency-Key");
+  auto job_pre = none->Options("/jobs/" + std::string(32, 'a'),
+                               {{"Origin", origin}, {"Access-Control-Request-Method", "DELETE"}});
+  ASSERT_TRUE(job_pre);
+  EXPECT_EQ(job_pre->status, 204);
+  EXPECT_EQ(job_pre->get_header_value("Access-Control-Allow-Methods"), "GET, DELETE");
+  for (const char* other : {"https://evil.example.com", "https://grader.example.edu:444",
+                            "http://grader.example.edu"}) {
+    auto bad = none->Options("/render", {{"Origin", other}, {"Access-Control-Request-Method", "POST"}});
+    ASSERT_TRUE(bad);
+    EXPECT_NE(bad->status / 100, 2) << other;
+    EXPECT_FALSE(bad->has_header("Access-Control-Allow-Origin")) << other;
+    auto get = server.client("s3cret")->Get("/jobs", {{"Origin", other}});
+    ASSERT_TRUE(get);
+    EXPECT_EQ(get->status, 200);
+    EXPECT_FALSE(get->has_header("Access-Control-Allow-Origin")) << other;
+    EXPECT_EQ(get->get_header_value("Vary"), "Origin");
+  }
+  // A preflight for a path the API does not have is refused.
+  auto unknown = none->Options("/nope", {{"Origin", origin}, {"Access-Control-Request-Method", "GET"}});
+  ASSERT_TRUE(unknown);
+  EXPECT_EQ(unknown->status, 404);
+
+  // The real requests: answers (errors too) readable by that origin's page, with the
+  // headers it needs exposed.
+  auto denied = none->Get("/jobs", {{"Origin", origin}});
+  ASSERT_TRUE(denied);
+  EXPECT_EQ(denied->status, 401);
+  EXPECT_EQ(denied->get_header_value("Access-Control-Allow-Origin"), origin);
+  auto c = server.client("s3cret");
+  auto r = c->Post("/render", {{"Origin", origin}}, kScene, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202);
+  EXPECT_EQ(r->get_header_value("Access-Control-Allow-Origin"), origin);
+  const std::string exposed = r->get_header_value("Access-Control-Expose-Headers");
+  EXPECT_NE(exposed.find("Location"), std::string::npos) << exposed;
+  EXPECT_NE(exposed.find("Retry-After"), std::string::npos) << exposed;
+  EXPECT_FALSE(r->has_header("Access-Control-Allow-Credentials"));
+  const std::string id = json_of(r)["id"];
+  std::string stream;
+  auto events = c->Get("/jobs/" + id + "/events", {{"Origin", origin}},
+                       [&](const char* data, size_t n) {
+                         stream.append(data, n);
+                         return true;
+                       });
+  ASSERT_TRUE(events);
+  EXPECT_EQ(events->get_header_value("Access-Control-Allow-Origin"), origin);
+  EXPECT_NE(stream.find("event: done"), std::string::npos) << stream;
+}
+
+TEST(ServerCors, TheOriginIsAFlagAndAnEnvironmentVariableAndMustBeExact) {
+  auto parse = [](std::vector<std::string> args, int& code) {
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    return parse_settings(static_cast<int>(argv.size()), argv.data(), code);
+  };
+  int code = 0;
+  auto s = parse({"rayfarmd"}, code);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->cors_origin, "");
+  s = parse({"rayfarmd", "--cors-origin", "https://Grader.Example.edu:8443"}, code);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->cors_origin, "https://grader.example.edu:8443");  // as browsers send it
+  ::setenv("RAYFARM_CORS_ORIGIN", "http://localhost:3000", 1);
+  s = parse({"rayfarmd"}, code);
+  ::unsetenv("RAYFARM_CORS_ORIGIN");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->cors_origin, "http://localhost:3000");
+  for (const char* bad : {"*", "https://grader.example.edu/", "https://grader.example.edu/lab",
+                          "grader.example.edu", "ftp://grader.example.edu"}) {
+    code = 0;
+    EXPECT_FALSE(parse({"rayfarmd", "--cors-origin", bad}, code)) << bad;
+    EXPECT_EQ(code, 2) << bad;
+  }
 }
 
 // ---- cpp-httplib 0.11.4 weaknesses, over a raw socket ------------------------------------
@@ -2121,6 +2361,23 @@ TEST(ServerHardening, ManyPartRangeDoesNotMultiplyTheImage) {
   ASSERT_TRUE(r);
   EXPECT_TRUE(r->status == 416 || r->body.size() <= done->body.size())
       << r->status << " with " << r->body.size() << " bytes";
+  // The refusal is the error document, whole (not cut into byte ranges of itself).
+  EXPECT_EQ(r->status, 416);
+  EXPECT_EQ(Json::parse(r->body)["error"]["code"], "range_not_satisfiable") << r->body;
+}
+
+TEST(ServerHardening, ASingleRangeGetsTheWholeImage) {
+  // Ranges are not offered: a slice under status 200 would pass for a whole (broken) image.
+  TestServer server;
+  auto c = server.client();
+  auto done = c->Post("/render?wait=1", kScene, "text/plain");
+  ASSERT_TRUE(done);
+  ASSERT_EQ(done->status, 200);
+  auto r = c->Get("/jobs/" + done->get_header_value("X-Job-Id") + "/image",
+                  {{"Range", "bytes=0-9"}});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 200);
+  EXPECT_EQ(r->body, done->body);
 }
 
 TEST(ServerHardening, HandlerExceptionTextIsNotSent) {
@@ -2324,6 +2581,164 @@ TEST(ServerHardening, ShutdownRefusesNewWorkAndEndsWaits) {
   EXPECT_EQ(r->status, 503);
   EXPECT_FALSE(r->get_header_value("Retry-After").empty());
   EXPECT_EQ(code_of(c->Get("/healthz")), 503);
+}
+
+
+// ---- Checking a scene without rendering it ----------------------------------------------
+
+// A sphere behind the eye renders black: the warning is what tells the student why.
+constexpr const char* kBehindEye = R"(camera c
+{ pixeldim 40 30
+  worlddim 8 6
+  viewpoint 4 3 5 }
+material m
+{ ambient 1 1 1 }
+light l
+{ location 1 5 -2 }
+sphere s
+{ material m
+  center 4 3 10
+  radius 1 }
+)";
+
+TEST(ServerCheck, GivesErrorsAndWarningsWithTheirPlaces) {
+  TestServer server;
+  auto c = server.client();
+  auto good = c->Post("/check", kScene, "text/plain");
+  ASSERT_TRUE(good);
+  ASSERT_EQ(good->status, 200) << good->body;
+  Json g = json_of(good);
+  EXPECT_EQ(g["ok"], true);
+  EXPECT_EQ(g["format"], "model");
+  EXPECT_TRUE(g["errors"].empty());
+  EXPECT_EQ(g["scene"]["cameras"][0]["name"], "cam1");
+  EXPECT_EQ(g["scene"]["cameras"][0]["width"], 40);
+
+  auto behind = c->Post("/check", kBehindEye, "text/plain");
+  ASSERT_TRUE(behind);
+  Json b = json_of(behind);
+  EXPECT_EQ(b["ok"], true);
+  ASSERT_FALSE(b["warnings"].empty()) << behind->body;
+  bool named = false;
+  for (const Json& w : b["warnings"])
+    named |= w["message"].get<std::string>().find("behind the eye") != std::string::npos &&
+             w["line"] == 9;
+  EXPECT_TRUE(named) << behind->body;
+
+  // Errors: all of them, each with its place; still a successful check.
+  auto bad = c->Post("/check", "sphere s { radious 1 }\nplane p { nromal 0 1 0 }\n", "text/plain");
+  ASSERT_TRUE(bad);
+  ASSERT_EQ(bad->status, 200);
+  Json e = json_of(bad);
+  EXPECT_EQ(e["ok"], false);
+  ASSERT_GE(e["errors"].size(), 2u) << bad->body;
+  EXPECT_EQ(e["errors"][0]["line"], 1);
+  EXPECT_TRUE(e["errors"][0]["column"].is_number());
+  EXPECT_FALSE(e.contains("scene"));
+}
+
+TEST(ServerCheck, CourseWarningsOnRequestAndUnknownOptionsRefused) {
+  TestServer server;
+  auto c = server.client();
+  const std::string commented = std::string("# a comment the course's program cannot read\n") + kScene;
+  auto plain = c->Post("/check", commented, "text/plain");
+  auto course = c->Post("/check?course=1", commented, "text/plain");
+  ASSERT_TRUE(plain && course);
+  auto has_course_warning = [](const Json& j) {
+    for (const Json& w : j["warnings"])
+      if (w["code"].get<std::string>().rfind("course-", 0) == 0) return true;
+    return false;
+  };
+  EXPECT_FALSE(has_course_warning(json_of(plain))) << plain->body;
+  EXPECT_TRUE(has_course_warning(json_of(course))) << course->body;
+
+  auto typo = c->Post("/check?cource=1", kScene, "text/plain");
+  ASSERT_TRUE(typo);
+  EXPECT_EQ(typo->status, 400);
+  auto empty = c->Post("/check", "", "text/plain");
+  ASSERT_TRUE(empty);
+  EXPECT_EQ(empty->status, 400);
+  EXPECT_EQ(error_of(empty)["code"], "empty_scene");
+}
+
+TEST(ServerRender, TheJobCarriesTheScenesWarnings) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Post("/render", kBehindEye, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 202) << r->body;
+  Json status = wait_final(*c, json_of(r)["id"]);
+  ASSERT_FALSE(status["warnings"].empty()) << status.dump();
+  EXPECT_NE(status["warnings"][0]["message"].get<std::string>().find("behind the eye"),
+            std::string::npos);
+  auto clean = c->Post("/render", kScene, "text/plain");
+  ASSERT_TRUE(clean);
+  EXPECT_TRUE(wait_final(*c, json_of(clean)["id"])["warnings"].empty());
+}
+
+TEST(ServerQuery, EveryRouteRefusesOptionsItDoesNotTake) {
+  TestServer server;
+  auto c = server.client();
+  auto r = c->Post("/render?wait=1", kScene, "text/plain");
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200);
+  const std::string id = r->get_header_value("X-Job-Id");
+  ASSERT_FALSE(id.empty());
+  struct Case {
+    std::string path, needle;
+  };
+  const Case cases[] = {
+      {"/jobs/" + id + "/image?format=jpg", "'format' is 'jpg'; it takes png, ppm"},
+      {"/jobs/" + id + "/image?frmat=ppm", "(did you mean 'format'?)"},
+      {"/jobs/" + id + "/image?format=ppm&format=png", "given more than once"},
+      {"/jobs/" + id + "?verbose=1", "GET /jobs/ID; it takes no options"},
+      {"/jobs?limit=5", "unknown option 'limit'"},
+      {"/samples?all=1", "unknown option 'all'"},
+      {"/healthz?x=1", "unknown option 'x'"},
+  };
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.path);
+    auto bad = c->Get(k.path);
+    ASSERT_TRUE(bad);
+    EXPECT_EQ(bad->status, 400);
+    EXPECT_EQ(error_of(bad)["code"], "invalid_option");
+    EXPECT_NE(error_of(bad)["message"].get<std::string>().find(k.needle), std::string::npos)
+        << bad->body;
+  }
+  // What the routes do take still works.
+  auto ppm = c->Get("/jobs/" + id + "/image?format=ppm");
+  ASSERT_TRUE(ppm);
+  EXPECT_EQ(ppm->status, 200);
+  EXPECT_EQ(ppm->body.rfind("P6", 0), 0u);
+  auto partial = c->Get("/jobs/" + id + "/image?partial=1");
+  ASSERT_TRUE(partial);
+  EXPECT_EQ(partial->status, 200);
+}
+
+TEST(ServerCache, ASceneAndItsTwinShareOneResultWhateverCarriesTheOptions) {
+  // The key is the scene and the options in effect: a JSON scene whose render block asks for
+  // spp 2 and its model twin sent with ?spp=2 are one render.
+  auto read = [](const char* name) {
+    std::ifstream in(std::string(RAYFARM_SOURCE_DIR "/scenes/") + name, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  std::string json = read("minimal.json");
+  ASSERT_FALSE(json.empty());
+  json = json.substr(0, json.rfind('}')) + ", \"render\": {\"spp\": 2}}";
+  TestServer server;
+  auto c = server.client();
+  auto first = c->Post("/render?wait=1&width=40&height=30", json, "application/json");
+  ASSERT_TRUE(first);
+  ASSERT_EQ(first->status, 200) << first->body;
+  EXPECT_EQ(first->get_header_value("X-Cache"), "miss");
+  auto twin = c->Post("/render?wait=1&width=40&height=30&spp=2", read("minimal.txt"), "text/plain");
+  ASSERT_TRUE(twin);
+  ASSERT_EQ(twin->status, 200) << twin->body;
+  EXPECT_EQ(twin->get_header_value("X-Cache"), "hit");
+  EXPECT_EQ(twin->body, first->body);
+  auto other = c->Post("/render?wait=1&width=40&height=30&spp=3", read("minimal.txt"), "text/plain");
+  ASSERT_TRUE(other);
+  EXPECT_EQ(other->get_header_value("X-Cache"), "miss");
 }
 
 }  // namespace

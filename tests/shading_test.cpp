@@ -1,4 +1,4 @@
-// The classic shading of SPEC §3 on tiny scenes whose pixels are worked out by hand from the
+// Classic shading (docs/rendering.md#shading) on tiny scenes, pixels worked out by hand from the
 // formulas (in long double here, independently of the tracer), asserted to the byte.
 #include <cmath>
 

@@ -1,4 +1,4 @@
-// Numerical stability on stiff and extreme scenes (SPEC §7), in both precisions: scaled twins,
+// Stability on stiff and extreme scenes (docs/numerics.md), in both precisions: scaled twins,
 // float against double, the textbook root form's failures, and root accuracy against long
 // double.
 #include <filesystem>

@@ -130,7 +130,7 @@ Object& add(Scene& scene, const S& shape, int material = 0, std::string name = {
   return o;
 }
 
-// The byte the spec's step 7 gives for a channel value.
+// The byte rounding=nearest gives for a channel value (docs/rendering.md#samples-and-bytes).
 inline int byte_of(long double c) {
   if (c < 0) c = 0;
   if (c > 1) c = 1;

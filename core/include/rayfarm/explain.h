@@ -40,7 +40,7 @@ struct LightTerm {
   // What is raised to the shininess: R·V (lecture, Phong), N·H (lecture, Blinn; cpsc102).
   double highlight_base = 0;
   // cpsc102: what the diffuse term is divided by (the distance, except behind a translucent
-  // sphere, COURSE §6).
+  // sphere, docs/profiles.md §6).
   double diffuse_distance = 0;
 };
 

@@ -1,4 +1,4 @@
-// The JSON scene format (SPEC §2): parsing into a SceneDesc and writing one out.
+// The JSON scene format (docs/json-format.md): parsing into a SceneDesc and writing one out.
 #pragma once
 
 #include <string>

@@ -1,4 +1,4 @@
-// The brace-delimited model file of the course (SPEC §1) into a SceneDesc.
+// The brace-delimited model file of the course (docs/model-format.md) into a SceneDesc.
 #pragma once
 
 #include <string_view>

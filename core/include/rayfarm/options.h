@@ -1,4 +1,4 @@
-// Render options (SPEC §4): one table of descriptors, parsed the same way from the JSON
+// Render options (docs/rendering.md#render-options): one table, parsed alike from the JSON
 // "render" object, HTTP query parameters and command-line flags, and printed from the same
 // table for job status, records and the cache key.
 #pragma once

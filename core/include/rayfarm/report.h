@@ -1,4 +1,4 @@
-// Error against run time (SPEC §7): a high-quality reference render, a sweep of settings
+// Error against run time (docs/numerics.md): a high-quality reference render, a sweep of settings
 // timed over several runs, each setting's error against the reference, the settings no
 // other beats on both time and error, and the root-form stability table.
 #pragma once

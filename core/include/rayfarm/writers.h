@@ -11,7 +11,9 @@
 namespace rayfarm {
 
 std::string write_model(const SceneDesc& desc);
-std::string write_json(const SceneDesc& desc);
+// `with_render`: also the scene's own "render" block (the content key leaves it out: it keys
+// the options in effect, however they were given).
+std::string write_json(const SceneDesc& desc, bool with_render = true);
 std::string write_pov(const Scene& scene, const RenderOptions& options);
 
 }  // namespace rayfarm

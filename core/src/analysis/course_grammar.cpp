@@ -1,4 +1,4 @@
-// The reference program's parse tables (COURSE.md §4–5; the course's given model.c,
+// The reference program's parse tables (docs/profiles.md §4–5; the course's given model.c,
 // object.c, parser.c, material.cpp and ray.h, as they survive in students' repositories).
 #include "analysis/course_grammar.h"
 
@@ -27,7 +27,7 @@ constexpr Attr kFiniteAttrs[] = {{"xdir", 3}, {"dimensions", 2}};
 constexpr Attr kTiledAttrs[] = {{"xdir", 3}, {"dimensions", 2}, {"altmaterial", 1, V::material}};
 constexpr Attr kTexAttrs[] = {{"texname", 1, V::texture}, {"mode", 1, V::integer}};
 constexpr Attr kSphereAttrs[] = {{"center", 3}, {"radius", 1}};
-// No reference log or image exists for triangle (COURSE.md §11): one group in free order, the
+// No reference log or image exists for triangle (docs/profiles.md §11): one group in free order, the
 // two forms of §5 (with or without normal and point) both accepted.
 constexpr Attr kTriangleAttrs[] = {{"normal", 3, V::real, false},
                                    {"point", 3, V::real, false},

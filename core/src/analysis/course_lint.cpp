@@ -1,7 +1,7 @@
 // Course lint: where the course's reference program (CPSC 102, 2014–18) would stop on, or
 // misread, a model file that rayfarm's kinder parser may accept.
 //
-// The model of that program (COURSE.md §4–5, and the course's given model.c, object.c,
+// The model of that program (docs/profiles.md §4–5, and the course's given model.c, object.c,
 // parser.c, material.cpp and ray.h):
 // - model_load reads a word with fscanf("%s") and dispatches on it; an unknown word prints
 //   "bad entity WORD" and exits. There are no comments: '#' and '//' are words like any other.

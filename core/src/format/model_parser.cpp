@@ -288,6 +288,9 @@ class ModelParser {
     bool bad = false;
     int n = 0;
     Where first_extra;
+    // "radius 1,5": a decimal comma reads as two numbers; remembered to say so if the count
+    // then comes out wrong.
+    std::string_view previous, comma_joined;
     for (;;) {
       const Token& v = lex_.peek();
       if (v.kind != Token::word) break;
@@ -301,6 +304,11 @@ class ModelParser {
         break;
       Token tok = lex_.next();
       ++n;
+      if (!previous.empty() && comma_joined.empty() &&
+          tok.text.data() == previous.data() + previous.size() + 1 &&
+          previous.data()[previous.size()] == ',')
+        comma_joined = std::string_view(previous.data(), previous.size() + 1 + tok.text.size());
+      previous = tok.text;
       std::string why;
       std::optional<double> number = parse_number(tok.text, &why);
       if (!number) {
@@ -316,7 +324,11 @@ class ModelParser {
     if (!bad && !valid_value_count(attr.kind, n)) {
       diags_.error("value-count",
                    "'" + a.key + "' takes " + describe(attr) + ", got " +
-                       std::to_string(n) + (n == 1 ? " value" : " values"),
+                       std::to_string(n) + (n == 1 ? " value" : " values") +
+                       (comma_joined.empty()
+                            ? ""
+                            : " (a comma separates numbers: if " + quoted(comma_joined) +
+                                  " is one number, write it with a decimal point)"),
                    n > hi ? first_extra : a.where);
       bad = true;
     }

@@ -119,7 +119,11 @@ std::optional<std::string> colour_in(std::string_view v, std::array<double, 3>& 
     i = j;
   }
   if (parts.size() == 1) parts.assign(3, parts[0]);
-  if (parts.size() != 3) return "must be 3 numbers >= 0 (R,G,B) or one grey value";
+  if (parts.size() != 3) return "must be 3 numbers in 0..1 (R,G,B) or one grey value";
+  // A colour above 1 would be clamped to white without a word; 255 is the usual slip.
+  for (double c : parts)
+    if (c > 1)
+      return "must be at most 1, got " + format_number(c) + " (colours are 0..1, not 0..255)";
   out = {parts[0], parts[1], parts[2]};
   return std::nullopt;
 }
@@ -161,7 +165,7 @@ constexpr OptionSpec kOptions[] = {
     {"precision", kPrecisions.value_help(), "arithmetic of the tracer",
      [](Opts& o, Text v) { return enum_in(kPrecisions, v, o.precision); },
      [](const Opts& o) { return std::string(to_string(o.precision)); }, true, "float"},
-    {"background", "R,G,B", "colour of rays that hit nothing (one number: grey)",
+    {"background", "R,G,B", "colour of rays that hit nothing, each 0..1 (one number: grey)",
      [](Opts& o, Text v) { return colour_in(v, o.background); },
      [](const Opts& o) {
        const auto& c = o.background;

@@ -1,4 +1,4 @@
-// SceneDesc to the JSON scene format (SPEC §2).
+// SceneDesc to the JSON scene format (docs/json-format.md).
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -83,7 +83,7 @@ void append(Json& object, std::string key, Json value) {
 
 }  // namespace
 
-std::string write_json(const SceneDesc& desc) {
+std::string write_json(const SceneDesc& desc, bool with_render) {
   Json root = Json::object();
   int cameras = 0;
   bool all_named = true;
@@ -131,7 +131,7 @@ std::string write_json(const SceneDesc& desc) {
       }
     }
   }
-  if (!desc.render.empty()) {
+  if (with_render && !desc.render.empty()) {
     Json r = Json::object();
     for (const OptionValue& v : desc.render) r[v.name] = option_value(v.name, v.value);
     root["render"] = r;

@@ -11,7 +11,7 @@
 namespace rayfarm {
 
 // r(y) of profile `surfer` and its slope: 1 the cone 4 − 2y/3, 2 the wave 1 + cos(y)/2,
-// 3 the wave 1 + sin(y)/2 (COURSE §10, measured from the reference images).
+// 3 the wave 1 + sin(y)/2 (docs/profiles.md §10, measured from the reference images).
 inline double revsurf_radius(int surfer, double y, double* slope = nullptr) {
   switch (surfer) {
     case 1:

@@ -210,7 +210,7 @@ std::vector<unsigned char> encode_png(const Image& image) {
     throw std::invalid_argument("a PNG cannot hold an empty image (" +
                                 size_text(image.width, image.height) + ")");
   }
-  // stb_image_write sizes its buffers in int (shared/NOTES.md): stay well clear.
+  // stb_image_write sizes its buffers in int: stay well clear.
   if ((3 * static_cast<std::uint64_t>(image.width) + 1) * image.height > (1u << 30)) {
     throw std::invalid_argument("image too large for PNG encoding: " +
                                 size_text(image.width, image.height));

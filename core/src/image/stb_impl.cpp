@@ -12,7 +12,7 @@
 namespace {
 
 // stb's own deflate costs ~60 ms on an 800x600 image whatever its level; libdeflate at level 1
-// is several times faster and, with the "up" filter, smaller too (shared/NOTES.md). stb asks for
+// is several times faster and, with the "up" filter, smaller too. stb asks for
 // a zlib stream in memory from malloc, which it frees with free().
 unsigned char* zlib_compress(unsigned char* data, int data_len, int* out_len, int /*quality*/) {
   using Compressor = std::unique_ptr<libdeflate_compressor, decltype(&libdeflate_free_compressor)>;

@@ -10,8 +10,10 @@ namespace rayfarm {
 
 std::string content_key(const SceneDesc& desc, const RenderOptions& options,
                         const std::vector<std::string>& texture_hashes) {
-  std::string text = "render-version " + std::to_string(kRenderVersion) + "\n" + write_json(desc) +
-                     "\n" + canonical_string(options);
+  // The scene's render block is left out: `options` are the ones in effect, so a JSON scene
+  // that asks for spp 4 and its model twin sent with spp=4 share one result.
+  std::string text = "render-version " + std::to_string(kRenderVersion) + "\n" +
+                     write_json(desc, false) + "\n" + canonical_string(options);
   for (const std::string& t : texture_hashes) text += "\ntexture " + t;
   return sha256_hex(text).substr(0, 40);
 }

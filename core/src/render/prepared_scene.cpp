@@ -27,7 +27,7 @@ Vec3<T> narrow(const glm::dvec3& v) {
 
 bool nonzero(const glm::dvec3& c) { return c.x > 0 || c.y > 0 || c.z > 0; }
 
-// The lecture's shininess when a material gives none (SPEC §1).
+// The lecture's shininess when a material gives none (docs/model-format.md#materials).
 constexpr double kLectureShininess = 32;
 
 // A frame the builder checked exists (geometry/frame.h).

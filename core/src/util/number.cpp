@@ -1,5 +1,6 @@
 // Strict decimal numbers for the model file: the lexical form is checked by hand because
 // std::from_chars/strtod also accept nan, inf and hex, which the format forbids.
+#include <cstdio>
 #include <cstdint>
 #include <charconv>
 #include <cmath>
@@ -78,7 +79,29 @@ std::optional<double> parse_number(std::string_view token, std::string* why) {
     if (exp_digits == 0) return fail("exponent has no digits");
     if (exp_negative) exponent = -exponent;
   }
-  if (i != s.size()) return fail("unexpected characters after the number");
+  std::string unexpected;
+  if (i != s.size()) {
+    // A character that looks like a space or a minus but is not ASCII (pasted from a document)
+    // is invisible in the message unless it is named.
+    const auto byte = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
+    const size_t extra = byte(i) >= 0xF0 ? 3 : byte(i) >= 0xE0 ? 2 : byte(i) >= 0xC0 ? 1 : 0;
+    if (extra > 0 && i + extra < s.size()) {
+      unsigned code = byte(i) & (0x3Fu >> extra);
+      for (size_t k = 1; k <= extra; ++k) code = (code << 6) | (byte(i + k) & 0x3Fu);
+      char hex[16];
+      std::snprintf(hex, sizeof hex, "U+%04X", code);
+      const char* name = code == 0xA0     ? " (a no-break space)"
+                         : code == 0x2009 ? " (a thin space)"
+                         : code == 0x202F ? " (a narrow no-break space)"
+                         : code == 0x2212 ? " (a minus sign; write '-')"
+                         : code == 0x2013 ? " (an en dash; write '-')"
+                                          : "";
+      unexpected = std::string("unexpected character ") + hex + name +
+                   " after the number: numbers are separated by plain spaces";
+      return fail(unexpected.c_str());
+    }
+    return fail("unexpected characters after the number");
+  }
 
   if (fast) {
     long power = exponent - static_cast<long>(frac_digits);

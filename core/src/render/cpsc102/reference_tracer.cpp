@@ -1,4 +1,4 @@
-// The reference program's trace (COURSE rules §2–§10), object by object in file order.
+// The reference program's trace (docs/profiles.md §2–§10), object by object in file order.
 #include "render/cpsc102/reference_tracer.h"
 
 #include <algorithm>
@@ -242,7 +242,7 @@ V3 ReferenceTracer<kRecord>::illuminate(int j, int k, const V3& p, const V3& n, 
     if (lr) lr->status = RecordedLight::filtered;
     e = mul(e, mm.filter);
     from = stored_[m];
-    // COURSE §6: a translucent sphere that is the last object the search tested leaves the
+    // docs/profiles.md §6: a translucent sphere that is the last object the search tested leaves the
     // diffuse term divided by the distance from where the shadow ray met it to the light.
     if (s_.objects[m].kind == RefObject::sphere && m == (skip == last ? last - 1 : last))
       d_diffuse = length(sub(light.location, from));

@@ -1,5 +1,5 @@
 // The course's reference program as a tracer (the cpsc102 profile): its trace and
-// illumination as COURSE rules state them, every object in file order, its arithmetic
+// illumination as docs/profiles.md states them, every object in file order, its arithmetic
 // (x87.h), and its accidents: hits in front of the screen ignored, paths cut at max_dist,
 // and reflected rays whose glint looks from a hit point that later hit tests overwrote.
 #pragma once

@@ -1,4 +1,4 @@
-// Surfaces of revolution as the reference program drew them (COURSE §10): about the axis
+// Surfaces of revolution as the reference program drew them (docs/profiles.md §10): about the axis
 // through `base` along `axis`, axial coordinate y in [0, height], radius r(y) of the
 // course's profile k. Its root finder is unknown (it misses some grazing hits that exist);
 // this one is geometry/revsurf.h's.
@@ -22,7 +22,7 @@ inline bool revsurf_hit(const RefObject& o, const V3& base, const V3& dir, doubl
   return t_hit > 0;
 }
 
-// The gradient of |radial|² − r(y)², normalised; the cone's axial part doubled (COURSE §10).
+// The gradient of |radial|² − r(y)², normalised; the cone's axial part doubled (docs/profiles.md §10).
 inline V3 revsurf_normal(const RefObject& o, const V3& p) {
   const V3 q = sub(p, o.base);
   const double y = dot(q, o.axis);

@@ -1,0 +1,80 @@
+// POST /check: what `rayfarm check` says of a scene, without rendering it: every error and
+// warning with its place, and with course=1 also where the course's reference program would
+// stop on or misread it. A scene with errors is still a successful check (200, "ok": false).
+#include "api_error.h"
+#include "http_util.h"
+#include "rayfarm/lint.h"
+#include "rayfarm/load.h"
+#include "routes.h"
+
+namespace rayfarm::server {
+
+using httplib::Request;
+using httplib::Response;
+
+namespace {
+
+nlohmann::json diagnostics_json(const Diagnostics& diags, Severity severity) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const Diagnostic& d : diags.items())
+    if (d.severity == severity) out.push_back(diagnostic_json(d));
+  return out;
+}
+
+}  // namespace
+
+void post_check(Service& svc, const Request& req, Response& res) {
+  bool course = false;
+  for (const auto& [k, v] : req.params) {
+    if (k != "course")
+      return send_error(res, 400, "invalid_option",
+                        "unknown option '" + k.substr(0, 64) + "' for /check; it takes: course");
+    if (v != "0" && v != "1" && v != "true" && v != "false")
+      return send_error(res, 400, "invalid_option", "course must be 1 or 0");
+    course = v == "1" || v == "true";
+  }
+  std::string text;
+  if (req.is_multipart_form_data()) {
+    if (!req.has_file("scene"))
+      return send_error(res, 400, "missing_scene", "multipart upload without a 'scene' part");
+    text = req.get_file_value("scene").content;
+  } else {
+    text = req.body;
+  }
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    return send_error(res, 400, "empty_scene",
+                      "the request has no scene: send a model file or a JSON scene as the body");
+
+  // Textures are not read here (they are the render's to upload): a texture the scene names
+  // is checked for its name, not its file.
+  LoadedScene loaded = load_scene(text);
+  Diagnostics warnings;
+  if (loaded.scene) {
+    RenderOptions options;
+    options.profile = svc.settings().default_profile;
+    Diagnostics scratch;
+    apply_options(options, loaded.scene->render, scratch);
+    lint_scene(*loaded.scene, options, warnings);
+  }
+  for (const Diagnostic& d : loaded.diags.items())
+    if (d.severity == Severity::warning) warnings.warning(d.code, d.message, d.where);
+  if (course && detect_format(text) == SceneFormat::model) lint_course(text, warnings);
+
+  nlohmann::json body = {{"ok", loaded.scene.has_value()},
+                         {"format", detect_format(text) == SceneFormat::model ? "model" : "json"},
+                         {"errors", diagnostics_json(loaded.diags, Severity::error)},
+                         {"warnings", diagnostics_json(warnings, Severity::warning)}};
+  if (loaded.scene) {
+    const Scene& s = *loaded.scene;
+    nlohmann::json cameras = nlohmann::json::array();
+    for (const Camera& c : s.cameras)
+      cameras.push_back({{"name", c.name}, {"width", c.width}, {"height", c.height}});
+    body["scene"] = {{"cameras", cameras},
+                     {"materials", s.materials.size()},
+                     {"lights", s.lights.size()},
+                     {"objects", s.objects.size()}};
+  }
+  send_json(res, 200, body);
+}
+
+}  // namespace rayfarm::server

@@ -1,0 +1,57 @@
+// The web page: GET / for browsers (curl and scripts still get the JSON index) and
+// GET /web/NAME for its scripts and styles, all built into the binary (web_files.h).
+#include "http_util.h"
+#include "routes.h"
+#include "web_files.h"
+
+namespace rayfarm::server {
+namespace {
+
+using httplib::Request;
+using httplib::Response;
+
+// Nothing but this server's own files and the API, images also from blob: and data: URLs (the
+// renders the page fetched with its token); no inline script, no framing.
+constexpr const char* kPagePolicy =
+    "default-src 'self'; img-src 'self' blob: data:; script-src 'self'; style-src 'self'; "
+    "connect-src 'self'; object-src 'none'; base-uri 'none'; form-action 'self'; "
+    "frame-ancestors 'none'";
+
+void send_web_file(const Request& req, Response& res, const WebFile& file) {
+  res.set_header("ETag", std::string(file.etag));
+  // Revalidated on every load (a 304 is cheap), so a new rayfarmd's page is never mixed with
+  // an old one's scripts.
+  res.set_header("Cache-Control", "no-cache");
+  res.set_header("X-Content-Type-Options", "nosniff");
+  if (file.content_type.rfind("text/html", 0) == 0) {
+    res.set_header("Content-Security-Policy", kPagePolicy);
+    res.set_header("Referrer-Policy", "no-referrer");
+  }
+  if (req.get_header_value("If-None-Match") == file.etag) {
+    res.status = 304;
+    return;
+  }
+  res.status = 200;
+  res.set_content(file.body.data(), file.body.size(), std::string(file.content_type));
+}
+
+}  // namespace
+
+bool wants_page(const Request& req) {
+  return req.get_header_value("Accept").find("text/html") != std::string::npos;
+}
+
+void get_page(Service&, const Request& req, Response& res) {
+  const WebFile* page = find_web_file("index.html");
+  if (!page) return send_error(res, 404, "not_found", "this rayfarmd was built without its page");
+  send_web_file(req, res, *page);
+}
+
+void get_web_file(Service&, const Request& req, Response& res) {
+  const std::string name = req.matches[1];
+  const WebFile* file = find_web_file(name);
+  if (!file) return send_error(res, 404, "not_found", "no file /web/" + name.substr(0, 100));
+  send_web_file(req, res, *file);
+}
+
+}  // namespace rayfarm::server
