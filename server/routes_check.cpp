@@ -24,15 +24,9 @@ nlohmann::json diagnostics_json(const Diagnostics& diags, Severity severity) {
 }  // namespace
 
 void post_check(Service& svc, const Request& req, Response& res) {
-  bool course = false;
-  for (const auto& [k, v] : req.params) {
-    if (k != "course")
-      return send_error(res, 400, "invalid_option",
-                        "unknown option '" + k.substr(0, 64) + "' for /check; it takes: course");
-    if (v != "0" && v != "1" && v != "true" && v != "false")
-      return send_error(res, 400, "invalid_option", "course must be 1 or 0");
-    course = v == "1" || v == "true";
-  }
+  if (!check_query(req, res, "POST /check", {{"course", {"1", "0", "true", "false", "yes", "no"}}}))
+    return;
+  const bool course = param_true(req, "course");
   std::string text;
   if (req.is_multipart_form_data()) {
     if (!req.has_file("scene"))
@@ -58,10 +52,11 @@ void post_check(Service& svc, const Request& req, Response& res) {
   }
   for (const Diagnostic& d : loaded.diags.items())
     if (d.severity == Severity::warning) warnings.warning(d.code, d.message, d.where);
-  if (course && detect_format(text) == SceneFormat::model) lint_course(text, warnings);
+  const bool model = detect_format(text) == SceneFormat::model;
+  if (course && model) lint_course(text, warnings);
 
   nlohmann::json body = {{"ok", loaded.scene.has_value()},
-                         {"format", detect_format(text) == SceneFormat::model ? "model" : "json"},
+                         {"format", model ? "model" : "json"},
                          {"errors", diagnostics_json(loaded.diags, Severity::error)},
                          {"warnings", diagnostics_json(warnings, Severity::warning)}};
   if (loaded.scene) {

@@ -2,18 +2,14 @@
 // and dark, every view (filled in) has named controls, a valued progress bar, alt texts,
 // 4.5:1 contrast and no sideways scroll; the views are reached and used from the keyboard.
 import assert from 'node:assert/strict';
-import { after, before, test } from 'node:test';
-import { SCENE, accessibilityProblems, encodePng, launchBrowser, openPage, startServer, unexpectedErrors } from './helpers.mjs';
+import { test } from 'node:test';
+import { SCENE, accessibilityProblems, encodePng, openPage, unexpectedErrors, withServerAndBrowser } from './helpers.mjs';
 
 let server;
 let browser;
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
+withServerAndBrowser((s, b) => {
+  server = s;
+  browser = b;
 });
 
 for (const colorScheme of ['light', 'dark']) {

@@ -3,18 +3,14 @@
 // flicker flips with Space, swipe follows its slider, the heat map is the server's; a scene
 // rendered here compares with the image it makes.
 import assert from 'node:assert/strict';
-import { after, before, test } from 'node:test';
-import { SCENE, encodePng, encodePpm, launchBrowser, openPage, startServer, unexpectedErrors } from './helpers.mjs';
+import { test } from 'node:test';
+import { SCENE, encodePng, encodePpm, openPage, unexpectedErrors, withServerAndBrowser } from './helpers.mjs';
 
 let server;
 let browser;
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
+withServerAndBrowser((s, b) => {
+  server = s;
+  browser = b;
 });
 
 const W = 16;

@@ -3,8 +3,8 @@
 import assert from 'node:assert/strict';
 import { readFile } from 'node:fs/promises';
 import path from 'node:path';
-import { after, before, test } from 'node:test';
-import { SOURCE_DIR, download, launchBrowser, openPage, startServer, unexpectedErrors } from './helpers.mjs';
+import { test } from 'node:test';
+import { SOURCE_DIR, download, openPage, unexpectedErrors, withServerAndBrowser } from './helpers.mjs';
 
 const LAB = path.join(SOURCE_DIR, 'scenes/assignments/lab1');
 const SCENES = ['spheres.txt', 'shadows.txt', 'mirror.txt', 'glint.txt'];
@@ -12,13 +12,9 @@ const IMAGES = ['spheres.png', 'shadows.png', 'mirror.png', 'glint.png'];
 
 let server;
 let browser;
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
+withServerAndBrowser((s, b) => {
+  server = s;
+  browser = b;
 });
 
 // POST /grade from node, with the parts named by hand as the assignment names them.

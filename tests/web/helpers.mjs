@@ -4,6 +4,7 @@
 import { spawn } from 'node:child_process';
 import { mkdtemp, readFile, rm } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
+import { after, before } from 'node:test';
 import path from 'node:path';
 import { deflateSync } from 'node:zlib';
 import { chromium } from 'playwright-core';
@@ -234,5 +235,21 @@ export function accessibilityProblems(page) {
     const root = document.documentElement;
     if (root.scrollWidth > root.clientWidth) problems.push(`the page scrolls sideways: ${root.scrollWidth} px in ${root.clientWidth} px`);
     return problems;
+  });
+}
+
+// One rayfarmd and one Chromium for a test file: started before its tests, stopped after
+// them; `use(server, browser)` hands them to the file.
+export function withServerAndBrowser(use, serverArgs = []) {
+  let server;
+  let browser;
+  before(async () => {
+    server = await startServer(serverArgs);
+    browser = await launchBrowser();
+    use(server, browser);
+  });
+  after(async () => {
+    await browser?.close();
+    await server?.stop();
   });
 }

@@ -7,19 +7,15 @@ import { execFile } from 'node:child_process';
 import { mkdtemp, readFile, rm } from 'node:fs/promises';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
-import { after, before, test } from 'node:test';
+import { test } from 'node:test';
 import { promisify } from 'node:util';
-import { SCENE, SOURCE_DIR, download, foreignRequests, launchBrowser, openPage, startServer, unexpectedErrors } from './helpers.mjs';
+import { SCENE, SOURCE_DIR, download, foreignRequests, openPage, unexpectedErrors, withServerAndBrowser } from './helpers.mjs';
 
 let server;
 let browser;
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
+withServerAndBrowser((s, b) => {
+  server = s;
+  browser = b;
 });
 
 async function jobIdOf(card) {

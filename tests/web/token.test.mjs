@@ -2,20 +2,16 @@
 // and not kept, the right one renders with its events streamed under the Authorization
 // header (never in a URL), and it lasts for the browser tab's session only.
 import assert from 'node:assert/strict';
-import { after, before, test } from 'node:test';
-import { SCENE, launchBrowser, openPage, startServer, unexpectedErrors } from './helpers.mjs';
+import { test } from 'node:test';
+import { SCENE, openPage, unexpectedErrors, withServerAndBrowser } from './helpers.mjs';
 
 const TOKEN = 's3cret-token-for-the-lab';
 let server;
 let browser;
-before(async () => {
-  server = await startServer(['--token', TOKEN]);
-  browser = await launchBrowser();
-});
-after(async () => {
-  await browser?.close();
-  await server?.stop();
-});
+withServerAndBrowser((s, b) => {
+  server = s;
+  browser = b;
+}, ['--token', TOKEN]);
 
 test('the page asks for the token, refuses a wrong one and renders with the right one', async () => {
   assert.equal((await server.api('/jobs')).status, 401);
