@@ -1,9 +1,9 @@
 // Every kind of object and light against the plain loops: seeded random scenes with spheres,
 // planes, tiled planes (both forms), fplanes, texplanes, triangles, tris and revsurfs, lit by
 // point lights, spotlights and projectors, with reflective and translucent materials. With
-// the scene-specific pipeline (hierarchies, screen bins, light buffers) and without it (a
-// plain loop everywhere) a render gives the same bytes, and the tracer's closest, occluded and
-// transmittance give the same answers.
+// the scene-specific pipeline (hierarchies, screen and mirror bins, light buffers) and without
+// it (a plain loop everywhere) a render gives the same bytes, and the tracer's closest,
+// occluded and transmittance give the same answers.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -130,10 +130,10 @@ Scene kinds_scene(Rng& rng, bool translucent) {
   projector.texture = 0;
   s.lights.push_back(projector);
 
-  // Spheres first and a wall on the left, then the other kinds shuffled.
+  // Spheres first and a mirror wall on the left, then the other kinds shuffled.
   for (int i = 0; i < 10; ++i)
     add(s, EntityKind::sphere, any_material(), Sphere{point_in_box(rng), rng.in(0.2, 1)});
-  add(s, EntityKind::plane, 0, Plane{{1, 0, 0}, {-2, 0, 0}});
+  add(s, EntityKind::plane, 1, Plane{{1, 0, 0}, {-2, 0, 0}});  // a mirror: mirror bins
   std::vector<int> kinds;
   for (int i = 0; i < 3; ++i) kinds.push_back(0);  // fplane
   for (int i = 0; i < 2; ++i) kinds.push_back(1);  // texplane
@@ -224,7 +224,7 @@ TEST(KindsExactness, RandomScenesOfEveryKindRenderTheSameWithAndWithoutSpecializ
           RenderStats stats;
           const Image fast = render_image(scene, o, 2, &stats);
           ASSERT_EQ(fast.width, o.width);
-          for (const char* part : {"bvh", "screen-bins"})
+          for (const char* part : {"bvh", "screen-bins", "mirror-bins"})
             EXPECT_NE(std::find(stats.parts.begin(), stats.parts.end(), part), stats.parts.end())
                 << part;
           EXPECT_EQ(std::find(stats.parts.begin(), stats.parts.end(), "light-buffers") !=
