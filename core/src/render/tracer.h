@@ -35,6 +35,9 @@ template <class T>
                                                        Origin from) {
   const bool own = index == from.object;
   if (own && !from.inside) return T(-1);
+  // A miss is a miss whichever rule applies below; most tests miss, so this comes first.
+  const auto roots = sphere_roots(o, d, centre, radius);
+  if (!roots) return T(-1);
   if (!own && from.object >= 0) {
     // A secondary ray that starts on this sphere too (a coincident or touching sphere), to
     // within the rounding of |f|^2 - r^2, at any scale: the rule of the ray's own object
@@ -42,14 +45,9 @@ template <class T>
     // guide: for grazing rays its rounding error is far larger than the scene's.)
     const Vec3<T> f = o - centre;
     const T ff = glm::dot(f, f), rr = radius * radius;
-    if (std::abs(ff - rr) <= 32 * std::numeric_limits<T>::epsilon() * (ff + rr)) {
-      if (glm::dot(f, d) >= 0) return T(-1);
-      auto roots = sphere_roots(o, d, centre, radius);
-      return roots ? roots->far : T(-1);
-    }
+    if (std::abs(ff - rr) <= 32 * std::numeric_limits<T>::epsilon() * (ff + rr))
+      return glm::dot(f, d) >= 0 ? T(-1) : roots->far;
   }
-  auto roots = sphere_roots(o, d, centre, radius);
-  if (!roots) return T(-1);
   if (own) return roots->far;
   return roots->near > 0 ? roots->near : roots->far;
 }
