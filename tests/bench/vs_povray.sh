@@ -53,7 +53,7 @@ for scene in "${scenes[@]}"; do
   : > "$work/$scene.rf"
   : > "$work/$scene.pov.t"
   for ((i = 0; i < runs; i++)); do
-    wall "$rayfarm" render "$model" --threads 2 -q -o "$work/$scene.png" >> "$work/$scene.rf"
+    wall "$rayfarm" render "$model" --threads 2 -o "$work/$scene.png" >> "$work/$scene.rf"
     wall povray "+I$work/$scene.pov" +W800 +H600 -A +WT2 "+O$work/$scene-pov.png" -D \
       >> "$work/$scene.pov.t"
   done
