@@ -8,10 +8,12 @@
 
 #include <algorithm>
 #include <cstring>
+#include <map>
 #include <memory>
 
 #include "random_scene.h"
 #include "rayfarm/render.h"
+#include "render/lecture_pipeline.h"
 #include "render/prepared_scene.h"
 #include "render/tracer.h"
 
@@ -311,6 +313,57 @@ TEST(KindsExactness, ClosestOccludedAndTransmittanceEqualTheLoopsOnRandomScenes)
     const Scene scene = kinds_scene(rng, seed % 2 == 0);
     expect_same_answers<double>(scene, rng, 3000);
     expect_same_answers<float>(scene, rng, 3000);
+  }
+}
+
+// Every pixel whose primary ray a shape's own test hits lies in that shape's rectangle, in
+// the shape bin of its tile (the bins list shapes by the spheres around their boxes).
+template <class T>
+void expect_shape_bins_hold_every_hit(const Scene& scene, int width, int height, int spp) {
+  RenderOptions o;
+  o.width = width;
+  o.height = height;
+  o.spp = spp;
+  o.seed = 5;
+  const LecturePipeline<T> pipeline(prepare_scene<T>(scene, o, 0));
+  const PreparedScene<T>& p = pipeline.scene();
+  ASSERT_FALSE(p.shape_bins.empty());
+  std::map<std::pair<int, int>, const ScreenBinEntry*> entry;
+  for (int t = 0; t < p.shape_bins.tiles_x * p.shape_bins.tiles_y; ++t)
+    for (const ScreenBinEntry& e : p.shape_bins.of_tile(t)) entry[{t, e.sphere}] = &e;
+  const Tracer<T> tracer(p);
+  int hits = 0;
+  for (int pass = 0; pass < spp; ++pass)
+    for (int r = 0; r < height; ++r)
+      for (int x = 0; x < width; ++x) {
+        const auto d = tracer.primary_direction(pipeline.screen_point_of(x, r, pass));
+        ASSERT_TRUE(d);
+        const int tile = (r / kTileSize) * p.shape_bins.tiles_x + x / kTileSize;
+        for (int k = 0; k < static_cast<int>(p.shapes.size()); ++k) {
+          if (!(shape_t(p.shapes[k], p.eye, *d, p.shape_base() + k, Origin{}) > 0)) continue;
+          ++hits;
+          auto it = entry.find({tile, k});
+          ASSERT_NE(it, entry.end()) << "shape " << k << " pixel " << x << "," << r;
+          const ScreenBinEntry& e = *it->second;
+          EXPECT_TRUE(x >= e.x0 && x <= e.x1 && r >= e.r0 && r <= e.r1)
+              << "shape " << k << " pixel " << x << "," << r;
+        }
+      }
+  EXPECT_GT(hits, width * height / 20);
+}
+
+TEST(KindsExactness, ShapeBinsHoldEveryPixelAShapeTestHits) {
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    Rng rng(300 + seed);
+    Scene scene = kinds_scene(rng, false);
+    for (const glm::dvec3& eye : {kEyes[0], kEyes[1], kEyes[2]}) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + " eye " + std::to_string(eye.x) + "," +
+                   std::to_string(eye.y) + "," + std::to_string(eye.z));
+      scene.cameras[0].viewpoint = eye;
+      expect_shape_bins_hold_every_hit<double>(scene, 64, 48, 1);
+      expect_shape_bins_hold_every_hit<float>(scene, 64, 48, 1);
+      expect_shape_bins_hold_every_hit<double>(scene, 40, 30, 3);
+    }
   }
 }
 

@@ -100,9 +100,10 @@ class LecturePipeline {
         PrimaryRay& ray = rays[static_cast<size_t>(r - b.r0) * w + (x - b.x0)];
         ray = {tracer.primary_direction(pixel_point(x, s_.height - 1 - r, pass)), Hit<T>{}};
         if (!ray.dir) continue;
-        // Planes and other shapes first, so spheres behind their hits are skipped.
+        // Planes and other shapes first, so spheres behind their hits are skipped (shapes
+        // with bins of their own come next).
         if (binned)
-          tracer.closest_plane(s_.eye, *ray.dir, Origin{}, t_max, ray.hit);
+          tracer.closest_plane(s_.eye, *ray.dir, Origin{}, t_max, ray.hit, s_.shape_bins.empty());
         else  // mirror bins only: the primary hits come from the hierarchy
           ray.hit = tracer.closest(s_.eye, *ray.dir, Origin{}, t_max);
       }
@@ -110,6 +111,25 @@ class LecturePipeline {
     if (!binned) return;
     const TileGrid grid(s_.width, s_.height);
     const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
+    // Shapes are not skipped by their near bound: a grazing ray's plane distance can fall
+    // short of it by far more than the rounding of the point it finds.
+    const int shape_base = s_.shape_base();
+    const std::span<const ScreenBinEntry> shapes =
+        s_.shape_bins.empty() ? std::span<const ScreenBinEntry>() : s_.shape_bins.of_tile(tile);
+    for (const ScreenBinEntry& e : shapes) {
+      const PreparedShape<T>& shape = s_.shapes[e.sphere];
+      const int index = shape_base + e.sphere;
+      const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
+      const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
+      for (int r = er0; r <= er1; ++r) {
+        PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
+        for (int x = ex0; x <= ex1; ++x, ++ray) {
+          if (!ray->dir) continue;
+          const T t = shape_t(shape, s_.eye, *ray->dir, index, Origin{});
+          if (t > 0 && t <= t_max && ray->hit.beaten_by(t, index)) ray->hit = {t, index};
+        }
+      }
+    }
     for (const ScreenBinEntry& e : s_.screen_bins.of_tile(tile)) {
       const PreparedSphere<T>& sp = s_.spheres[e.sphere];
       const double near = e.near;

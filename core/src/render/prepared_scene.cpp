@@ -171,6 +171,25 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
 
 namespace {
 
+// The spheres around the other shapes' boxes, for their screen bins: widened like the
+// spheres' by 256 epsilons of the coordinates involved, which covers the rounding of the
+// point a shape test finds (it lies on the ray, and within that of the shape).
+template <class T>
+std::vector<WidenedSphere> shape_spheres(const PreparedScene<T>& p, double eps, double view) {
+  std::vector<BvhBox> boxes;
+  double scale = view;
+  for (const PreparedShape<T>& s : p.shapes) {
+    boxes.push_back(shape_box(s));
+    for (const glm::dvec3& c : {boxes.back().lo, boxes.back().hi})
+      scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+  }
+  std::vector<WidenedSphere> out;
+  out.reserve(boxes.size());
+  for (const BvhBox& b : boxes)
+    out.push_back({(b.lo + b.hi) / 2.0, glm::length(b.hi - b.lo) / 2 + 256 * eps * 2 * scale});
+  return out;
+}
+
 // Mirror bins for each plane that reflects primary rays (mirror_bins.h). The real reflection
 // ray strays from the mirrored primary ray by tens of epsilons of |eye|, |p| and the plane's
 // point (origin) plus tens of epsilons per unit of length (direction), and the sphere test
@@ -248,6 +267,8 @@ void build_ray_culling(PreparedScene<T>& p) {
     const ScreenCamera camera{glm::dvec3(p.eye), ww, wh, p.width, p.height, pad_x, pad_y};
     p.screen_bins =
         build_screen_bins(camera, widened(256 * eps * 2 * view), kTileSize, kMaxCoverage);
+    if (!p.screen_bins.empty() && p.shapes.size() >= kBvhMinShapes)
+      p.shape_bins = build_screen_bins(camera, shape_spheres(p, eps, view), kTileSize, kMaxCoverage);
   }
   p.features.screen_bins = !p.screen_bins.empty();
   if (pad_x <= kMaxPad && pad_y <= kMaxPad) add_mirror_bins(p, view, scale, pad_x, pad_y);

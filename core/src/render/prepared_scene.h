@@ -109,6 +109,9 @@ struct PreparedScene {
   Bvh bvh;                                // empty: spheres are tested in a plain loop
   std::vector<BvhSphere<T>> bvh_spheres;  // the spheres in bvh.order
   ScreenBins screen_bins;                 // empty: primary rays use `bvh`
+  // Bins over the other shapes (entries name shapes), built with screen_bins from spheres
+  // around their boxes; empty: primary rays test them through shape_bvh.
+  ScreenBins shape_bins;
   std::vector<LightBuffer> light_buffers;  // per light (each may be empty), or none
   // Per plane (each may be empty), or none: bins over the spheres mirrored in the plane, for
   // the reflection rays primary rays send off it whose origin has no |coordinate| beyond

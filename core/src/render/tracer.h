@@ -170,16 +170,16 @@ class Tracer {
     return best.object >= 0 ? best : plane;
   }
 
-  // Lets the nearest plane or other shape with 0 < t <= t_max take best's place if it comes
-  // first.
-  void closest_plane(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max,
-                     Hit<T>& best) const {
+  // Lets the nearest plane or (with `shapes`) other shape with 0 < t <= t_max take best's
+  // place if it comes first.
+  void closest_plane(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max, Hit<T>& best,
+                     bool shapes = true) const {
     const int base = s_.plane_base();
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
       const T t = plane_t(o, d, s_.planes[j], base + j, from);
       if (t > 0 && t <= t_max && t < best.t) best = {t, base + j};
     }
-    if (!s_.shapes.empty()) closest_shape(o, d, from, t_max, best);
+    if (shapes && !s_.shapes.empty()) closest_shape(o, d, from, t_max, best);
   }
 
   // Whether anything lies at 0 < t < dist. Planes first: they are few and often block.
