@@ -8,6 +8,8 @@
 #
 #   tests/bench/vs_povray.sh [BUILD_DIR] [RUNS] [SCENE...]   (from the repository root;
 #                                                             defaults: build 5, every scene)
+#   BEFORE=OTHER_BUILD_DIR tests/bench/vs_povray.sh ...      also runs that build's rayfarm in
+#                                                             the same rotation (before/after)
 set -euo pipefail
 
 build=${1:-build}
@@ -15,6 +17,8 @@ runs=${2:-5}
 shift $(( $# < 2 ? $# : 2 ))
 rayfarm="$build/client/rayfarm"
 [[ -x "$rayfarm" ]] || { echo "no $rayfarm: build first (cmake --build $build)" >&2; exit 2; }
+before=${BEFORE:+$BEFORE/client/rayfarm}
+[[ -z "$before" || -x "$before" ]] || { echo "no $before" >&2; exit 2; }
 command -v povray >/dev/null || { echo "povray is not installed" >&2; exit 2; }
 
 generated=$(python3 tests/bench/gen-bench-scenes.py --list | awk '{ print $1 }')
@@ -46,19 +50,33 @@ wall() {
 median() { sort -g | awk '{ v[NR] = $1 } END { m = int((NR + 1) / 2); print (NR % 2) ? v[m] : (v[m] + v[m + 1]) / 2 }'; }
 
 echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
-printf '%-18s %10s %10s %8s\n' scene rayfarm_s povray_s ratio
+if [[ -n "$before" ]]; then
+  printf '%-18s %10s %10s %10s %8s %8s\n' scene before_s rayfarm_s povray_s before ratio
+else
+  printf '%-18s %10s %10s %8s\n' scene rayfarm_s povray_s ratio
+fi
 for scene in "${scenes[@]}"; do
   model="$work/$scene.txt"
   "$rayfarm" convert "$model" --to pov -o "$work/$scene.pov"
   : > "$work/$scene.rf"
+  : > "$work/$scene.before"
   : > "$work/$scene.pov.t"
   for ((i = 0; i < runs; i++)); do
+    [[ -z "$before" ]] ||
+      wall "$before" render "$model" --threads 2 -o "$work/$scene.png" >> "$work/$scene.before"
     wall "$rayfarm" render "$model" --threads 2 -o "$work/$scene.png" >> "$work/$scene.rf"
     wall povray "+I$work/$scene.pov" +W800 +H600 -A +WT2 "+O$work/$scene-pov.png" -D \
       >> "$work/$scene.pov.t"
   done
   rf=$(median < "$work/$scene.rf")
   pv=$(median < "$work/$scene.pov.t")
-  printf '%-18s %10.3f %10.3f %7.1fx\n' "$scene" "$rf" "$pv" "$(awk -v a="$rf" -v b="$pv" 'BEGIN { print b / a }')"
+  ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1fx", b / a }'; }
+  if [[ -n "$before" ]]; then
+    bf=$(median < "$work/$scene.before")
+    printf '%-18s %10.3f %10.3f %10.3f %8s %8s\n' "$scene" "$bf" "$rf" "$pv" "$(ratio "$bf" "$pv")" \
+      "$(ratio "$rf" "$pv")"
+  else
+    printf '%-18s %10.3f %10.3f %8s\n' "$scene" "$rf" "$pv" "$(ratio "$rf" "$pv")"
+  fi
 done
 echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
