@@ -1,17 +1,19 @@
 // Every kind of object and light against the plain loops: seeded random scenes with spheres,
 // planes, tiled planes (both forms), fplanes, texplanes, triangles, tris and revsurfs, lit by
 // point lights, spotlights and projectors, with reflective and translucent materials. With
-// the scene-specific pipeline (hierarchies, screen bins, light buffers) and without it (a
-// plain loop everywhere) a render gives the same bytes, and the tracer's closest, occluded and
-// transmittance give the same answers.
+// the scene-specific pipeline (hierarchies, screen and mirror bins, light buffers) and without
+// it (a plain loop everywhere) a render gives the same bytes, and the tracer's closest,
+// occluded and transmittance give the same answers.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstring>
+#include <map>
 #include <memory>
 
 #include "random_scene.h"
 #include "rayfarm/render.h"
+#include "render/lecture_pipeline.h"
 #include "render/prepared_scene.h"
 #include "render/tracer.h"
 
@@ -130,10 +132,10 @@ Scene kinds_scene(Rng& rng, bool translucent) {
   projector.texture = 0;
   s.lights.push_back(projector);
 
-  // Spheres first and a wall on the left, then the other kinds shuffled.
+  // Spheres first and a mirror wall on the left, then the other kinds shuffled.
   for (int i = 0; i < 10; ++i)
     add(s, EntityKind::sphere, any_material(), Sphere{point_in_box(rng), rng.in(0.2, 1)});
-  add(s, EntityKind::plane, 0, Plane{{1, 0, 0}, {-2, 0, 0}});
+  add(s, EntityKind::plane, 1, Plane{{1, 0, 0}, {-2, 0, 0}});  // a mirror: mirror bins
   std::vector<int> kinds;
   for (int i = 0; i < 3; ++i) kinds.push_back(0);  // fplane
   for (int i = 0; i < 2; ++i) kinds.push_back(1);  // texplane
@@ -224,7 +226,7 @@ TEST(KindsExactness, RandomScenesOfEveryKindRenderTheSameWithAndWithoutSpecializ
           RenderStats stats;
           const Image fast = render_image(scene, o, 2, &stats);
           ASSERT_EQ(fast.width, o.width);
-          for (const char* part : {"bvh", "screen-bins"})
+          for (const char* part : {"bvh", "screen-bins", "mirror-bins"})
             EXPECT_NE(std::find(stats.parts.begin(), stats.parts.end(), part), stats.parts.end())
                 << part;
           EXPECT_EQ(std::find(stats.parts.begin(), stats.parts.end(), "light-buffers") !=
@@ -311,6 +313,57 @@ TEST(KindsExactness, ClosestOccludedAndTransmittanceEqualTheLoopsOnRandomScenes)
     const Scene scene = kinds_scene(rng, seed % 2 == 0);
     expect_same_answers<double>(scene, rng, 3000);
     expect_same_answers<float>(scene, rng, 3000);
+  }
+}
+
+// Every pixel whose primary ray a shape's own test hits lies in that shape's rectangle, in
+// the shape bin of its tile (the bins list shapes by the spheres around their boxes).
+template <class T>
+void expect_shape_bins_hold_every_hit(const Scene& scene, int width, int height, int spp) {
+  RenderOptions o;
+  o.width = width;
+  o.height = height;
+  o.spp = spp;
+  o.seed = 5;
+  const LecturePipeline<T> pipeline(prepare_scene<T>(scene, o, 0));
+  const PreparedScene<T>& p = pipeline.scene();
+  ASSERT_FALSE(p.shape_bins.empty());
+  std::map<std::pair<int, int>, const ScreenBinEntry*> entry;
+  for (int t = 0; t < p.shape_bins.tiles_x * p.shape_bins.tiles_y; ++t)
+    for (const ScreenBinEntry& e : p.shape_bins.of_tile(t)) entry[{t, e.sphere}] = &e;
+  const Tracer<T> tracer(p);
+  int hits = 0;
+  for (int pass = 0; pass < spp; ++pass)
+    for (int r = 0; r < height; ++r)
+      for (int x = 0; x < width; ++x) {
+        const auto d = tracer.primary_direction(pipeline.screen_point_of(x, r, pass));
+        ASSERT_TRUE(d);
+        const int tile = (r / kTileSize) * p.shape_bins.tiles_x + x / kTileSize;
+        for (int k = 0; k < static_cast<int>(p.shapes.size()); ++k) {
+          if (!(shape_t(p.shapes[k], p.eye, *d, p.shape_base() + k, Origin{}) > 0)) continue;
+          ++hits;
+          auto it = entry.find({tile, k});
+          ASSERT_NE(it, entry.end()) << "shape " << k << " pixel " << x << "," << r;
+          const ScreenBinEntry& e = *it->second;
+          EXPECT_TRUE(x >= e.x0 && x <= e.x1 && r >= e.r0 && r <= e.r1)
+              << "shape " << k << " pixel " << x << "," << r;
+        }
+      }
+  EXPECT_GT(hits, width * height / 20);
+}
+
+TEST(KindsExactness, ShapeBinsHoldEveryPixelAShapeTestHits) {
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    Rng rng(300 + seed);
+    Scene scene = kinds_scene(rng, false);
+    for (const glm::dvec3& eye : {kEyes[0], kEyes[1], kEyes[2]}) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + " eye " + std::to_string(eye.x) + "," +
+                   std::to_string(eye.y) + "," + std::to_string(eye.z));
+      scene.cameras[0].viewpoint = eye;
+      expect_shape_bins_hold_every_hit<double>(scene, 64, 48, 1);
+      expect_shape_bins_hold_every_hit<float>(scene, 64, 48, 1);
+      expect_shape_bins_hold_every_hit<double>(scene, 40, 30, 3);
+    }
   }
 }
 

@@ -147,5 +147,29 @@ TEST(ScreenBins, SpheresBehindTheEyeAreLeftOutAndOnesAroundItCoverTheScreen) {
   }
 }
 
+TEST(ScreenBins, SpheresBesideTheEyeReachOnlyTheirSideOfTheScreen) {
+  // Both cut the eye's plane z = 5; one is far to the side, one near it on the right.
+  const std::vector<WidenedSphere> spheres{{{12, 1.5, 5}, 0.5}, {{2.6, 1.5, 4.9}, 0.5}};
+  const ScreenCamera cam{{2, 1.5, 5}, 4, 3, 64, 48, 0.5, 0.5};
+  const ScreenBins bins = build_screen_bins(cam, spheres, 32, 64);
+  ASSERT_EQ(bins.entries.size(), 2u);  // the near one, in the two tiles on the right
+  for (const ScreenBinEntry& e : bins.entries) {
+    EXPECT_EQ(e.sphere, 1);
+    // Its points to the right of the eye by 0.1 or more, at w <= 0.12: x >= 2 + 0.1 / 0.12.
+    EXPECT_EQ(e.x0, 44);
+    EXPECT_EQ(e.x1, 63);
+    EXPECT_EQ(e.r0, 0);
+    EXPECT_EQ(e.r1, 47);
+  }
+}
+
+TEST(ScreenBins, RectanglesHoldEveryPixelWithTheEyeInsideTheCloud) {
+  Rng rng(23);
+  Scene scene = random_scene(rng, 1500, 4);
+  scene.cameras[0].viewpoint = {0.2, -0.1, 0.3};  // spheres on every side, many cut its plane
+  expect_rectangles_cover_every_hit<double>(scene, 80, 60);
+  expect_rectangles_cover_every_hit<float>(scene, 80, 60);
+}
+
 }  // namespace
 }  // namespace rayfarm

@@ -1,24 +1,40 @@
 #!/usr/bin/env bash
 # Whole-process wall time of rayfarm against POV-Ray 3.7 at 800x600, 1 sample per pixel,
-# two threads, on the lecture scene, the 8,000-sphere grid and 100,000 random spheres.
+# two threads, on the benchmark set: the lecture scene, the 8,000-sphere grid, 100,000 random
+# spheres, the course lab with the newer kinds, and the scenes of tests/bench/gen-bench-scenes.py.
 # Each scene is exported with `rayfarm convert --to pov`, then the two renderers run
-# alternately (so both see the same machine load); medians and their ratio are printed.
+# alternately (so both see the same machine load); medians and their ratio are printed, with
+# the load average before and after.
 #
-#   tests/bench/vs_povray.sh [BUILD_DIR] [RUNS]     (from the repository root; defaults: build 5)
+#   tests/bench/vs_povray.sh [BUILD_DIR] [RUNS] [SCENE...]   (from the repository root;
+#                                                             defaults: build 5, every scene)
+#   BEFORE=OTHER_BUILD_DIR tests/bench/vs_povray.sh ...      also runs that build's rayfarm in
+#                                                             the same rotation (before/after)
 set -euo pipefail
 
 build=${1:-build}
 runs=${2:-5}
+shift $(( $# < 2 ? $# : 2 ))
 rayfarm="$build/client/rayfarm"
 [[ -x "$rayfarm" ]] || { echo "no $rayfarm: build first (cmake --build $build)" >&2; exit 2; }
+before=${BEFORE:+$BEFORE/client/rayfarm}
+[[ -z "$before" || -x "$before" ]] || { echo "no $before" >&2; exit 2; }
 command -v povray >/dev/null || { echo "povray is not installed" >&2; exit 2; }
+
+generated=$(python3 tests/bench/gen-bench-scenes.py --list | awk '{ print $1 }')
+scenes=("$@")
+[[ ${#scenes[@]} -gt 0 ]] || scenes=(cho grid-8000 random-100k lab $generated)
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-cp scenes/cho.txt "$work/cho.txt"
-cp scenes/grid-8000.txt "$work/grid-8000.txt"
-python3 scenes/gen-random-spheres.py > "$work/random-100k.txt"
+for scene in "${scenes[@]}"; do
+  case $scene in
+    cho | grid-8000 | lab) cp "scenes/$scene.txt" "$work/$scene.txt" ;;
+    random-100k) python3 scenes/gen-random-spheres.py > "$work/random-100k.txt" ;;
+    *) python3 tests/bench/gen-bench-scenes.py "$work" "$scene" ;;
+  esac
+done
 
 now() { date +%s.%N; }
 
@@ -33,18 +49,34 @@ wall() {
 
 median() { sort -g | awk '{ v[NR] = $1 } END { m = int((NR + 1) / 2); print (NR % 2) ? v[m] : (v[m] + v[m + 1]) / 2 }'; }
 
-printf '%-12s %12s %12s %8s\n' scene rayfarm_s povray_s ratio
-for scene in cho grid-8000 random-100k; do
+echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+if [[ -n "$before" ]]; then
+  printf '%-18s %10s %10s %10s %8s %8s\n' scene before_s rayfarm_s povray_s before ratio
+else
+  printf '%-18s %10s %10s %8s\n' scene rayfarm_s povray_s ratio
+fi
+for scene in "${scenes[@]}"; do
   model="$work/$scene.txt"
   "$rayfarm" convert "$model" --to pov -o "$work/$scene.pov"
   : > "$work/$scene.rf"
+  : > "$work/$scene.before"
   : > "$work/$scene.pov.t"
   for ((i = 0; i < runs; i++)); do
+    [[ -z "$before" ]] ||
+      wall "$before" render "$model" --threads 2 -o "$work/$scene.png" >> "$work/$scene.before"
     wall "$rayfarm" render "$model" --threads 2 -o "$work/$scene.png" >> "$work/$scene.rf"
     wall povray "+I$work/$scene.pov" +W800 +H600 -A +WT2 "+O$work/$scene-pov.png" -D \
       >> "$work/$scene.pov.t"
   done
   rf=$(median < "$work/$scene.rf")
   pv=$(median < "$work/$scene.pov.t")
-  printf '%-12s %12.3f %12.3f %7.1fx\n' "$scene" "$rf" "$pv" "$(awk -v a="$rf" -v b="$pv" 'BEGIN { print b / a }')"
+  ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1fx", b / a }'; }
+  if [[ -n "$before" ]]; then
+    bf=$(median < "$work/$scene.before")
+    printf '%-18s %10.3f %10.3f %10.3f %8s %8s\n' "$scene" "$bf" "$rf" "$pv" "$(ratio "$bf" "$pv")" \
+      "$(ratio "$rf" "$pv")"
+  else
+    printf '%-18s %10.3f %10.3f %8s\n' "$scene" "$rf" "$pv" "$(ratio "$rf" "$pv")"
+  fi
 done
+echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"

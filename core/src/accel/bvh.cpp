@@ -91,13 +91,15 @@ class Builder {
 
   // Fills nodes[slot] with the subtree over refs[begin, end), whose bounds are b; its
   // descendants are appended depth first (a child pair, then the first child's subtree,
-  // then the second's). Returns the subtree's depth.
+  // then the second's). Returns the subtree's depth. `moved`: the range is in the scratch
+  // array, where the last partition put it (partitions go back and forth between the two).
   int build(std::vector<BuildNode>& nodes, std::size_t slot, std::size_t begin, std::size_t end,
-            const Bounds& b, int depth, int threads) {
+            const Bounds& b, int depth, int threads, bool moved = false) {
     nodes[slot].box = b.box;
     Bounds left, right;
-    const std::size_t mid = split(begin, end, b, depth, left, right);
+    const std::size_t mid = split(begin, end, b, depth, left, right, moved);
     if (mid == begin) {
+      if (moved) std::copy(scratch_.begin() + begin, scratch_.begin() + end, refs_.begin() + begin);
       nodes[slot].index = static_cast<std::int32_t>(begin);
       nodes[slot].count = static_cast<std::int32_t>(end - begin);
       return 0;
@@ -110,17 +112,18 @@ class Builder {
       std::vector<BuildNode> left_nodes(1), right_nodes(1);
       const int left_threads = threads / 2;
       int left_depth = 0;
-      std::thread worker(
-          [&] { left_depth = build(left_nodes, 0, begin, mid, left, depth + 1, left_threads); });
+      std::thread worker([&] {
+        left_depth = build(left_nodes, 0, begin, mid, left, depth + 1, left_threads, moved);
+      });
       const int right_depth =
-          build(right_nodes, 0, mid, end, right, depth + 1, threads - left_threads);
+          build(right_nodes, 0, mid, end, right, depth + 1, threads - left_threads, moved);
       worker.join();
       splice(nodes, first, left_nodes);
       splice(nodes, first + 1, right_nodes);
       return 1 + std::max(left_depth, right_depth);
     }
-    const int left_depth = build(nodes, first, begin, mid, left, depth + 1, 1);
-    return 1 + std::max(left_depth, build(nodes, first + 1, mid, end, right, depth + 1, 1));
+    const int left_depth = build(nodes, first, begin, mid, left, depth + 1, 1, moved);
+    return 1 + std::max(left_depth, build(nodes, first + 1, mid, end, right, depth + 1, 1, moved));
   }
 
  private:
@@ -137,10 +140,11 @@ class Builder {
     for (std::size_t i = 1; i < sub.size(); ++i) nodes.push_back(moved(sub[i]));
   }
 
-  // Partitions refs[begin, end) and returns where the second child starts, with the bounds
-  // of both sides; `begin` means "make a leaf".
+  // Partitions [begin, end) into the other array (flipping `moved`) and returns where the
+  // second child starts, with the bounds of both sides; `begin` means "make a leaf".
   std::size_t split(std::size_t begin, std::size_t end, const Bounds& set, int depth,
-                    Bounds& left, Bounds& right) {
+                    Bounds& left, Bounds& right, bool& moved) {
+    std::vector<Ref>& from = moved ? scratch_ : refs_;
     const Box3& box = set.box;
     const Box3& centres = set.centres;
     const std::size_t count = end - begin;
@@ -151,25 +155,31 @@ class Builder {
     if (extent[2] > extent[axis]) axis = 2;
     if (!(extent[axis] > 0)) return begin;  // all centres coincide: nothing to separate
     const bool small = count <= static_cast<std::size_t>(max_leaf_);
-    if (depth >= kMedianDepth) return small ? begin : median_split(begin, end, axis, left, right);
+    if (depth >= kMedianDepth)
+      return small ? begin : median_split(from, begin, end, axis, left, right);
 
+    // A bin keeps the bounds of its boxes and of their centres: the children's bounds are
+    // then unions of bins, with no pass over the children to find them.
     struct Bin {  // no initialisers: only the nb bins in use are cleared
       Box3 box;
+      Box3 centres;
       std::int32_t count;
     };
     const int nb = static_cast<int>(std::min<std::size_t>(kBins, count));
     const float last = static_cast<float>(nb - 1);
     std::array<std::array<Bin, kBins>, 3> bins;
-    for (auto& axis_bins : bins) std::fill_n(axis_bins.begin(), nb, Bin{Box3{}, 0});
+    for (auto& axis_bins : bins) std::fill_n(axis_bins.begin(), nb, Bin{Box3{}, Box3{}, 0});
     F4 scale = bvh_simd::splat(0.0f);
     for (int a = 0; a < 3; ++a)
       scale[a] = extent[a] > 0 ? static_cast<float>(nb) / extent[a] : 0.0f;
     for (std::size_t i = begin; i < end; ++i) {
-      const Ref& r = refs_[i];
-      const I4 b = bins_of(r.centre2(), centres.lo, scale, last);
+      const Ref& r = from[i];
+      const F4 c = r.centre2();
+      const I4 b = bins_of(c, centres.lo, scale, last);
       for (int a = 0; a < 3; ++a) {
         Bin& bin = bins[a][b[a]];
         bin.box.grow(r.box);
+        bin.centres.grow(c);
         ++bin.count;
       }
     }
@@ -206,58 +216,51 @@ class Builder {
       const float split_cost = area > 0 ? 1 + best_cost / area : kInf;
       if (!(static_cast<float>(count) > split_cost)) return begin;
     }
-    if (best_axis < 0) return median_split(begin, end, axis, left, right);
-    // Branch-free partition through the scratch array (the left side keeps its order, the
-    // right side is reversed): the side is a coin toss the branch predictor cannot learn.
-    // The children's bounds are gathered on the way (each side grows by the reference or by
-    // an empty box), so no pass over the children is needed to find them.
+    if (best_axis < 0) return median_split(from, begin, end, axis, left, right);
+    for (int b = 0; b < nb; ++b) {
+      Bounds& side = b <= best_bin ? left : right;
+      side.box.grow(bins[best_axis][b].box);
+      side.centres.grow(bins[best_axis][b].centres);
+    }
+    // Branch-free partition into the other array (the left side keeps its order, the right
+    // side is reversed): the side is a coin toss the branch predictor cannot learn.
+    std::vector<Ref>& to = moved ? refs_ : scratch_;
     std::size_t to_left = begin, to_right = end;
-    const Box3 none;
     for (std::size_t i = begin; i < end; ++i) {
-      const Ref& r = refs_[i];
-      const F4 c = r.centre2();
+      const Ref& r = from[i];
       // Arithmetic rather than ?: so that the compiler cannot turn it back into a branch.
-      const std::size_t is_left = bins_of(c, centres.lo, scale, last)[best_axis] <= best_bin;
-      scratch_[to_right - 1 + is_left * (to_left - to_right + 1)] = r;
+      const std::size_t is_left =
+          bins_of(r.centre2(), centres.lo, scale, last)[best_axis] <= best_bin;
+      to[to_right - 1 + is_left * (to_left - to_right + 1)] = r;
       to_left += is_left;
       to_right -= 1 - is_left;
-      const I4 m = -static_cast<std::int32_t>(is_left) + I4{0, 0, 0, 0};
-      left.box.grow(Box3{select(m, r.box.lo, none.lo), select(m, r.box.hi, none.hi)});
-      right.box.grow(Box3{select(~m, r.box.lo, none.lo), select(~m, r.box.hi, none.hi)});
-      left.centres.grow(select(m, c, none.lo), select(m, c, none.hi));
-      right.centres.grow(select(~m, c, none.lo), select(~m, c, none.hi));
     }
-    std::copy(scratch_.begin() + begin, scratch_.begin() + end, refs_.begin() + begin);
+    moved = !moved;
     const std::size_t mid = to_left;
-    if (mid == begin || mid == end) return median_split(begin, end, axis, left, right);
+    if (mid == begin || mid == end) return median_split(to, begin, end, axis, left, right);
     return mid;
   }
 
-  static F4 select(I4 mask, F4 yes, F4 no) {
-    return reinterpret_cast<F4>((reinterpret_cast<I4>(yes) & mask) |
-                                (reinterpret_cast<I4>(no) & ~mask));
-  }
-
-  Bounds bounds(std::size_t begin, std::size_t end) const {
+  static Bounds bounds(const std::vector<Ref>& refs, std::size_t begin, std::size_t end) {
     Bounds b;
     for (std::size_t i = begin; i < end; ++i) {
-      b.box.grow(refs_[i].box);
-      b.centres.grow(refs_[i].centre2());
+      b.box.grow(refs[i].box);
+      b.centres.grow(refs[i].centre2());
     }
     return b;
   }
 
   // Halves the set by centre (ties by index): bounds the depth whatever the scene.
-  std::size_t median_split(std::size_t begin, std::size_t end, int axis, Bounds& left,
-                           Bounds& right) {
+  static std::size_t median_split(std::vector<Ref>& refs, std::size_t begin, std::size_t end,
+                                  int axis, Bounds& left, Bounds& right) {
     const std::size_t mid = begin + (end - begin) / 2;
-    std::nth_element(refs_.begin() + begin, refs_.begin() + mid, refs_.begin() + end,
+    std::nth_element(refs.begin() + begin, refs.begin() + mid, refs.begin() + end,
                      [axis](const Ref& a, const Ref& b) {
                        const float ca = a.centre2()[axis], cb = b.centre2()[axis];
                        return ca < cb || (ca == cb && a.index < b.index);
                      });
-    left = bounds(begin, mid);
-    right = bounds(mid, end);
+    left = bounds(refs, begin, mid);
+    right = bounds(refs, mid, end);
     return mid;
   }
 

@@ -6,9 +6,12 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/geometric.hpp>
+#include <limits>
 
 namespace rayfarm {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 struct Rect {
   int x0, x1, r0, r1;
@@ -68,9 +71,26 @@ bool sphere_rect(const ScreenCamera& cam, const WidenedSphere& s, Rect& out) {
   if (!(w_max > 0)) return false;  // wholly behind the eye
   const Rect all{0, cam.width - 1, 0, cam.height - 1};
   out = all;
-  if (!(w_min > 0)) return true;  // around the eye's plane: any ray may meet it
-  double x_lo, x_hi, y_lo, y_hi;
   int y0 = 0, y1 = cam.height - 1;
+  if (!(w_min > 0)) {
+    // Around the eye's plane. A ray meets its points X with 0 < w <= w_max on the screen at
+    // e + (X - e) / w: where all of the sphere lies to one side of the eye along an axis, at
+    // least its nearest distance / w_max to that side (and up to infinity).
+    auto side = [&](double e_a, double c_a, double world, int count, double pad, int& lo,
+                    int& hi) {
+      const double below = e_a - (c_a + s.radius), above = (c_a - s.radius) - e_a;
+      if (above > 0) return pixel_range(e_a + above / w_max, kInf, world, count, pad, lo, hi);
+      if (below > 0) return pixel_range(-kInf, e_a - below / w_max, world, count, pad, lo, hi);
+      return true;
+    };
+    if (!side(e.x, s.centre.x, cam.world_width, cam.width, cam.pad_x, out.x0, out.x1) ||
+        !side(e.y, s.centre.y, cam.world_height, cam.height, cam.pad_y, y0, y1))
+      return false;
+    out.r0 = cam.height - 1 - y1;
+    out.r1 = cam.height - 1 - y0;
+    return true;
+  }
+  double x_lo, x_hi, y_lo, y_hi;
   if (tangent_range(e.x, e.z, s.centre.x, s.centre.z, s.radius, x_lo, x_hi) &&
       !pixel_range(x_lo, x_hi, cam.world_width, cam.width, cam.pad_x, out.x0, out.x1))
     return false;

@@ -3,6 +3,7 @@
 // Whitted tracer (tracer.h).
 #pragma once
 
+#include <algorithm>
 #include <optional>
 #include <vector>
 
@@ -32,9 +33,13 @@ class LecturePipeline {
                    RayCounts& counts, double& /*error*/, Canceled&& canceled) const {
     out.resize(static_cast<size_t>(b.width()) * b.rows());
     Tracer<T> tracer(s_);
-    const bool binned = !s_.screen_bins.empty();
+    const bool binned = !s_.screen_bins.empty() || !s_.mirror_bins.empty();
     std::vector<PrimaryRay> rays;
-    if (binned) first_hits(b, pass, tracer, rays);
+    std::vector<BounceRay> bounces;
+    if (binned) {
+      first_hits(b, pass, tracer, rays);
+      if (!s_.mirror_bins.empty()) bounce_hits(b, tracer, rays, bounces);
+    }
     glm::dvec3* px = out.data();
     for (int r = b.r0; r < b.r1; ++r) {
       if (canceled()) return false;
@@ -43,7 +48,9 @@ class LecturePipeline {
         Vec3<T> c;
         if (binned) {
           const PrimaryRay& ray = rays[static_cast<size_t>(r - b.r0) * b.width() + (x - b.x0)];
-          c = ray.dir ? tracer.primary(*ray.dir, ray.hit) : tracer.primary(pixel_point(x, y, pass));
+          c = ray.dir ? tracer.primary(*ray.dir, ray.hit,
+                                       ray.bounce >= 0 ? &bounces[ray.bounce].hit : nullptr)
+                      : tracer.primary(pixel_point(x, y, pass));
         } else {
           c = tracer.primary(pixel_point(x, y, pass));
         }
@@ -67,6 +74,15 @@ class LecturePipeline {
   struct PrimaryRay {
     std::optional<Vec3<T>> dir;
     Hit<T> hit;
+    int bounce = -1;  // its reflection ray's entry in the tile's BounceRays, if it has one
+  };
+
+  // A reflection ray off a plane with mirror bins, sent by a primary ray.
+  struct BounceRay {
+    typename Tracer<T>::Bounce ray;
+    int plane;   // index into s_.planes
+    T t_primary;  // the primary ray's distance to the plane
+    Hit<T> hit;
   };
 
   // The closest hit of every primary ray of the tile, from its screen bin: each sphere is
@@ -78,16 +94,42 @@ class LecturePipeline {
     const int w = b.width();
     rays.resize(static_cast<size_t>(w) * b.rows());
     const T t_max = s_.max_dist;
+    const bool binned = !s_.screen_bins.empty();
     for (int r = b.r0; r < b.r1; ++r) {
       for (int x = b.x0; x < b.x1; ++x) {
         PrimaryRay& ray = rays[static_cast<size_t>(r - b.r0) * w + (x - b.x0)];
         ray = {tracer.primary_direction(pixel_point(x, s_.height - 1 - r, pass)), Hit<T>{}};
-        // Planes and other shapes first, so spheres behind their hits are skipped.
-        if (ray.dir) tracer.closest_plane(s_.eye, *ray.dir, Origin{}, t_max, ray.hit);
+        if (!ray.dir) continue;
+        // Planes and other shapes first, so spheres behind their hits are skipped (shapes
+        // with bins of their own come next).
+        if (binned)
+          tracer.closest_plane(s_.eye, *ray.dir, Origin{}, t_max, ray.hit, s_.shape_bins.empty());
+        else  // mirror bins only: the primary hits come from the hierarchy
+          ray.hit = tracer.closest(s_.eye, *ray.dir, Origin{}, t_max);
       }
     }
+    if (!binned) return;
     const TileGrid grid(s_.width, s_.height);
     const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
+    // Shapes are not skipped by their near bound: a grazing ray's plane distance can fall
+    // short of it by far more than the rounding of the point it finds.
+    const int shape_base = s_.shape_base();
+    const std::span<const ScreenBinEntry> shapes =
+        s_.shape_bins.empty() ? std::span<const ScreenBinEntry>() : s_.shape_bins.of_tile(tile);
+    for (const ScreenBinEntry& e : shapes) {
+      const PreparedShape<T>& shape = s_.shapes[e.sphere];
+      const int index = shape_base + e.sphere;
+      const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
+      const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
+      for (int r = er0; r <= er1; ++r) {
+        PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
+        for (int x = ex0; x <= ex1; ++x, ++ray) {
+          if (!ray->dir) continue;
+          const T t = shape_t(shape, s_.eye, *ray->dir, index, Origin{});
+          if (t > 0 && t <= t_max && ray->hit.beaten_by(t, index)) ray->hit = {t, index};
+        }
+      }
+    }
     for (const ScreenBinEntry& e : s_.screen_bins.of_tile(tile)) {
       const PreparedSphere<T>& sp = s_.spheres[e.sphere];
       const double near = e.near;
@@ -100,6 +142,59 @@ class LecturePipeline {
           if (!ray->dir || near > static_cast<double>(best.t)) continue;
           const T t = sphere_t(s_.eye, *ray->dir, sp.centre, sp.radius, e.sphere, Origin{});
           if (t > 0 && t <= t_max && best.beaten_by(t, e.sphere)) best = {t, e.sphere};
+        }
+      }
+    }
+  }
+
+  // The closest hit of each reflection ray the tile's primary rays send off planes with
+  // mirror bins, from those bins: each mirrored sphere is tested only on the pixels of its
+  // rectangle, nearest the eye first, and skipped where a hit nearer than all of it (by
+  // mirror_near) is known. Planes and other shapes go first, as in Tracer::closest, and ties
+  // go by Hit::beaten_by, so the hits are the loop's. Rays starting beyond mirror_reach are
+  // left to the tracer.
+  void bounce_hits(const TileBounds& b, const Tracer<T>& tracer, std::vector<PrimaryRay>& rays,
+                   std::vector<BounceRay>& bounces) const {
+    const int base = s_.plane_base();
+    const int planes = static_cast<int>(s_.mirror_bins.size());
+    unsigned used = 0;  // planes with rays here (bit 31: any beyond the 31st)
+    for (PrimaryRay& ray : rays) {
+      const int j = ray.hit.object - base;
+      if (!ray.dir || j < 0 || j >= planes || s_.mirror_bins[j].empty()) continue;
+      const auto bounce = tracer.primary_bounce(*ray.dir, ray.hit);
+      if (!bounce) continue;
+      const glm::dvec3 o = glm::abs(glm::dvec3(bounce->origin));
+      if (!(std::max({o.x, o.y, o.z}) <= s_.mirror_reach)) continue;
+      ray.bounce = static_cast<int>(bounces.size());
+      bounces.push_back({*bounce, j, ray.hit.t, Hit<T>{}});
+      BounceRay& br = bounces.back();
+      tracer.closest_plane(br.ray.origin, br.ray.dir, br.ray.from, br.ray.t_max, br.hit);
+      used |= 1u << std::min(j, 31);
+    }
+    if (bounces.empty()) return;
+    const TileGrid grid(s_.width, s_.height);
+    const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
+    const int w = b.width();
+    for (int j = 0; j < planes; ++j) {
+      if (!(used & (1u << std::min(j, 31))) || s_.mirror_bins[j].empty()) continue;
+      for (const ScreenBinEntry& e : s_.mirror_bins[j].of_tile(tile)) {
+        const PreparedSphere<T>& sp = s_.spheres[e.sphere];
+        const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
+        const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
+        for (int r = er0; r <= er1; ++r) {
+          const PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
+          for (int x = ex0; x <= ex1; ++x, ++ray) {
+            if (ray->bounce < 0) continue;
+            BounceRay& br = bounces[ray->bounce];
+            if (br.plane != j ||
+                mirror_near(e.near, static_cast<double>(br.t_primary), s_.mirror_slack) >
+                    static_cast<double>(br.hit.t))
+              continue;
+            const T t = sphere_t(br.ray.origin, br.ray.dir, sp.centre, sp.radius, e.sphere,
+                                 br.ray.from);
+            if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, e.sphere))
+              br.hit = {t, e.sphere};
+          }
         }
       }
     }

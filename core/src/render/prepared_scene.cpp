@@ -5,6 +5,7 @@
 #include "geometry/frame.h"
 
 #include <algorithm>
+#include <cmath>
 #include <exception>
 #include <limits>
 #include <thread>
@@ -144,6 +145,7 @@ std::vector<std::string> Features::parts() const {
   if (bvh) out.push_back("bvh");
   if (screen_bins) out.push_back("screen-bins");
   if (light_buffers) out.push_back("light-buffers");
+  if (mirror_bins) out.push_back("mirror-bins");
   return out;
 }
 
@@ -168,6 +170,62 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
 }
 
 namespace {
+
+// The spheres around the other shapes' boxes, for their screen bins: widened like the
+// spheres' by 256 epsilons of the coordinates involved, which covers the rounding of the
+// point a shape test finds (it lies on the ray, and within that of the shape).
+template <class T>
+std::vector<WidenedSphere> shape_spheres(const PreparedScene<T>& p, double eps, double view) {
+  std::vector<BvhBox> boxes;
+  double scale = view;
+  for (const PreparedShape<T>& s : p.shapes) {
+    boxes.push_back(shape_box(s));
+    for (const glm::dvec3& c : {boxes.back().lo, boxes.back().hi})
+      scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+  }
+  std::vector<WidenedSphere> out;
+  out.reserve(boxes.size());
+  for (const BvhBox& b : boxes)
+    out.push_back({(b.lo + b.hi) / 2.0, glm::length(b.hi - b.lo) / 2 + 256 * eps * 2 * scale});
+  return out;
+}
+
+// Mirror bins for each plane that reflects primary rays (mirror_bins.h). The real reflection
+// ray strays from the mirrored primary ray by tens of epsilons of |eye|, |p| and the plane's
+// point (origin) plus tens of epsilons per unit of length (direction), and the sphere test
+// errs by tens of epsilons of the coordinates: spheres are widened by 1024 epsilons of all
+// of them together, for origins p within `reach`.
+template <class T>
+void add_mirror_bins(PreparedScene<T>& p, double view, double scale, double pad_x,
+                       double pad_y) {
+  if (!p.features.reflection || p.max_depth < 1) return;
+  const double eps = std::numeric_limits<T>::epsilon();
+  const double reach = 4 * view;
+  const ScreenCamera camera{glm::dvec3(p.eye), static_cast<double>(p.world_width),
+                            static_cast<double>(p.world_height), p.width, p.height, pad_x, pad_y};
+  constexpr double kMaxCoverage = 64;
+  for (std::size_t j = 0; j < p.planes.size(); ++j) {
+    const PreparedPlane<T>& pl = p.planes[j];
+    const PreparedMaterial<T>& m = p.materials[pl.material];
+    if (!m.reflects || m.max_specular < p.bailout) continue;  // it sends no reflection rays
+    const glm::dvec3 q(pl.point);
+    const double plane_scale = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)});
+    const double margin = 1024 * eps * (reach + view + scale + plane_scale);
+    std::vector<WidenedSphere> spheres;
+    spheres.reserve(p.spheres.size());
+    for (const PreparedSphere<T>& s : p.spheres)
+      spheres.push_back({glm::dvec3(s.centre), static_cast<double>(s.radius) + margin});
+    ScreenBins bins =
+        build_mirror_bins(camera, spheres, glm::dvec3(pl.normal), q, kTileSize, kMaxCoverage);
+    if (bins.empty()) continue;
+    p.mirror_bins.resize(p.planes.size());
+    p.mirror_bins[j] = std::move(bins);
+    p.features.mirror_bins = true;
+  }
+  p.mirror_reach = reach;
+  // The sphere test's near root can fall short by about sqrt(epsilon) of the distance.
+  p.mirror_slack = 16 * std::sqrt(eps);
+}
 
 // Builds the screen bins and (with shadows on) the light buffers, where they pay.
 template <class T>
@@ -209,8 +267,11 @@ void build_ray_culling(PreparedScene<T>& p) {
     const ScreenCamera camera{glm::dvec3(p.eye), ww, wh, p.width, p.height, pad_x, pad_y};
     p.screen_bins =
         build_screen_bins(camera, widened(256 * eps * 2 * view), kTileSize, kMaxCoverage);
+    if (!p.screen_bins.empty() && p.shapes.size() >= kBvhMinShapes)
+      p.shape_bins = build_screen_bins(camera, shape_spheres(p, eps, view), kTileSize, kMaxCoverage);
   }
   p.features.screen_bins = !p.screen_bins.empty();
+  if (pad_x <= kMaxPad && pad_y <= kMaxPad) add_mirror_bins(p, view, scale, pad_x, pad_y);
 
   // Light buffers answer "is anything in the way"; through translucent objects the shadow
   // ray must find every one on its way, so they step aside.

@@ -7,6 +7,7 @@
 
 #include "accel/bvh.h"
 #include "accel/light_buffer.h"
+#include "accel/mirror_bins.h"
 #include "accel/screen_bins.h"
 #include "rayfarm/intersect.h"
 #include "rayfarm/options.h"
@@ -27,6 +28,7 @@ struct Features {
   bool bvh = false;  // spheres behind a hierarchy instead of a loop
   bool screen_bins = false;    // primary rays find their sphere by projection (screen_bins.h)
   bool light_buffers = false;  // shadow rays test the spheres of one direction cell (light_buffer.h)
+  bool mirror_bins = false;  // reflection rays off planes from primary hits use mirror_bins.h
 
   std::vector<std::string> parts() const;
 };
@@ -107,7 +109,16 @@ struct PreparedScene {
   Bvh bvh;                                // empty: spheres are tested in a plain loop
   std::vector<BvhSphere<T>> bvh_spheres;  // the spheres in bvh.order
   ScreenBins screen_bins;                 // empty: primary rays use `bvh`
+  // Bins over the other shapes (entries name shapes), built with screen_bins from spheres
+  // around their boxes; empty: primary rays test them through shape_bvh.
+  ScreenBins shape_bins;
   std::vector<LightBuffer> light_buffers;  // per light (each may be empty), or none
+  // Per plane (each may be empty), or none: bins over the spheres mirrored in the plane, for
+  // the reflection rays primary rays send off it whose origin has no |coordinate| beyond
+  // mirror_reach. Searched with the slack mirror_slack (mirror_near).
+  std::vector<ScreenBins> mirror_bins;
+  double mirror_reach = 0;
+  double mirror_slack = 0;
   Bvh shape_bvh;                          // empty: the other shapes are tested in a loop
 
   int plane_base() const { return static_cast<int>(spheres.size()); }

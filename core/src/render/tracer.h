@@ -35,6 +35,9 @@ template <class T>
                                                        Origin from) {
   const bool own = index == from.object;
   if (own && !from.inside) return T(-1);
+  // A miss is a miss whichever rule applies below; most tests miss, so this comes first.
+  const auto roots = sphere_roots(o, d, centre, radius);
+  if (!roots) return T(-1);
   if (!own && from.object >= 0) {
     // A secondary ray that starts on this sphere too (a coincident or touching sphere), to
     // within the rounding of |f|^2 - r^2, at any scale: the rule of the ray's own object
@@ -42,14 +45,9 @@ template <class T>
     // guide: for grazing rays its rounding error is far larger than the scene's.)
     const Vec3<T> f = o - centre;
     const T ff = glm::dot(f, f), rr = radius * radius;
-    if (std::abs(ff - rr) <= 32 * std::numeric_limits<T>::epsilon() * (ff + rr)) {
-      if (glm::dot(f, d) >= 0) return T(-1);
-      auto roots = sphere_roots(o, d, centre, radius);
-      return roots ? roots->far : T(-1);
-    }
+    if (std::abs(ff - rr) <= 32 * std::numeric_limits<T>::epsilon() * (ff + rr))
+      return glm::dot(f, d) >= 0 ? T(-1) : roots->far;
   }
-  auto roots = sphere_roots(o, d, centre, radius);
-  if (!roots) return T(-1);
   if (own) return roots->far;
   return roots->near > 0 ? roots->near : roots->far;
 }
@@ -119,10 +117,26 @@ class Tracer {
   }
 
   // Colour of the primary ray along `dir` (from primary_direction) whose closest hit is
-  // already known (as closest() would give it).
-  Vec3<T> primary(const Vec3<T>& dir, const Hit<T>& first) {
+  // already known (as closest() would give it), and, if `bounce` is given, the closest hit of
+  // the reflection ray that hit sends (as closest() would give it for primary_bounce's ray).
+  Vec3<T> primary(const Vec3<T>& dir, const Hit<T>& first, const Hit<T>* bounce = nullptr) {
     ++counts.primary;
-    return trace(s_.eye, dir, &first);
+    return trace(s_.eye, dir, &first, bounce);
+  }
+
+  // The reflection ray a primary ray along `dir` sends from its closest hit `first`, if it
+  // sends one: computed exactly as follow() computes it, with the distance cap it searches to.
+  struct Bounce {
+    Vec3<T> origin, dir;
+    Origin from;
+    T t_max;
+  };
+  std::optional<Bounce> primary_bounce(const Vec3<T>& dir, const Hit<T>& first) const {
+    const T travelled = T(0) + first.t;  // follow(): depth 0, path weight 1, travelled 0
+    const Vec3<T> p = s_.eye + first.t * dir;
+    const Surface sf = surface(first.object, p, dir);
+    if (!reflects(*sf.m, 0, T(1), true)) return std::nullopt;
+    return Bounce{p, reflected(dir, sf.n), {first.object, sf.inside}, s_.max_dist - travelled};
   }
 
   // The nearest hit with 0 < t <= t_max, in the order of Hit::beaten_by. The hierarchies,
@@ -156,16 +170,16 @@ class Tracer {
     return best.object >= 0 ? best : plane;
   }
 
-  // Lets the nearest plane or other shape with 0 < t <= t_max take best's place if it comes
-  // first.
-  void closest_plane(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max,
-                     Hit<T>& best) const {
+  // Lets the nearest plane or (with `shapes`) other shape with 0 < t <= t_max take best's
+  // place if it comes first.
+  void closest_plane(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max, Hit<T>& best,
+                     bool shapes = true) const {
     const int base = s_.plane_base();
     for (int j = 0; j < static_cast<int>(s_.planes.size()); ++j) {
       const T t = plane_t(o, d, s_.planes[j], base + j, from);
       if (t > 0 && t <= t_max && t < best.t) best = {t, base + j};
     }
-    if (!s_.shapes.empty()) closest_shape(o, d, from, t_max, best);
+    if (shapes && !s_.shapes.empty()) closest_shape(o, d, from, t_max, best);
   }
 
   // Whether anything lies at 0 < t < dist. Planes first: they are few and often block.
@@ -397,15 +411,17 @@ class Tracer {
     int parent;  // the level whose transmitted ray this is
   };
 
-  // `first`, when given, is the closest hit of the first ray.
-  Vec3<T> trace(Vec3<T> origin, Vec3<T> dir, const Hit<T>* first) {
+  // `first`, when given, is the closest hit of the first ray; `bounce`, when given, that of
+  // the reflection ray its hit sends.
+  Vec3<T> trace(Vec3<T> origin, Vec3<T> dir, const Hit<T>* first, const Hit<T>* bounce = nullptr) {
     levels_.clear();
     pending_.clear();
-    follow(origin, dir, Origin{}, 0, 1, 0, -1, first);
+    follow(origin, dir, Origin{}, 0, 1, 0, -1, first, bounce);
     while (!pending_.empty()) {
       const PendingRay r = pending_.back();
       pending_.pop_back();
-      follow(r.origin, r.dir, r.from, r.travelled, r.path_weight, r.depth, r.parent, nullptr);
+      follow(r.origin, r.dir, r.from, r.travelled, r.path_weight, r.depth, r.parent, nullptr,
+             nullptr);
     }
     // Children come after their parents: fold from the last level back.
     for (size_t i = levels_.size(); i-- > 0;) {
@@ -422,7 +438,7 @@ class Tracer {
   // Follows one ray and its chain of reflections, adding a level per hit; a translucent hit
   // queues its transmitted ray.
   void follow(Vec3<T> origin, Vec3<T> dir, Origin from, T travelled, T path_weight, int depth,
-              int parent, const Hit<T>* first) {
+              int parent, const Hit<T>* first, const Hit<T>* bounce) {
     int previous = -1;
     for (;; ++depth) {
       const int index = static_cast<int>(levels_.size());
@@ -430,8 +446,8 @@ class Tracer {
         levels_[previous].reflected = index;
       else if (parent >= 0)
         levels_[parent].transmitted = index;
-      Hit<T> hit =
-          first && previous < 0 ? *first : closest(origin, dir, from, s_.max_dist - travelled);
+      const Hit<T>* known = previous < 0 ? first : index == 1 ? bounce : nullptr;
+      Hit<T> hit = known ? *known : closest(origin, dir, from, s_.max_dist - travelled);
       if (hit.object < 0) {
         if (recording())
           record_ray(origin, dir, from, travelled, depth, previous, parent, hit, nullptr);
@@ -461,18 +477,26 @@ class Tracer {
                             path_weight * m.transparency, depth + 1, index});
         ++counts.reflection;
       }
-      const bool reflect = s_.features.reflection && m.reflects && depth < s_.max_depth &&
-                           budget && !(path_weight * m.max_specular < s_.bailout);
-      if (!reflect) return;
+      if (!reflects(m, depth, path_weight, budget)) return;
       levels_[index].weight = m.specular;
       path_weight *= m.max_specular;
-      dir = dir - (2 * glm::dot(sf.n, dir)) * sf.n;
+      dir = reflected(dir, sf.n);
       origin = p;
       travelled = r_total;
       from = {hit.object, sf.inside};
       previous = index;
       ++counts.reflection;
     }
+  }
+
+  // Whether a hit on material m sends a reflection ray (follow() and primary_bounce()).
+  bool reflects(const PreparedMaterial<T>& m, int depth, T path_weight, bool budget) const {
+    return s_.features.reflection && m.reflects && depth < s_.max_depth && budget &&
+           !(path_weight * m.max_specular < s_.bailout);
+  }
+
+  static Vec3<T> reflected(const Vec3<T>& dir, const Vec3<T>& n) {
+    return dir - (2 * glm::dot(n, dir)) * n;
   }
 
   // Adds each light's term in scene order, as the formula reads.

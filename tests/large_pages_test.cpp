@@ -1,0 +1,66 @@
+// The client's operator new (client/large_pages.cpp), linked into this test alone: blocks of
+// 2 MB and more come from 2 MB-aligned mappings, every size and alignment is usable and
+// freed, from several threads at once, and the containers the renderer uses work on it.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <new>
+#include <thread>
+#include <vector>
+
+namespace {
+
+constexpr std::size_t kMiB = std::size_t{1} << 20;
+
+std::uintptr_t address(const void* p) { return reinterpret_cast<std::uintptr_t>(p); }
+
+TEST(LargePages, LargeBlocksStart64BytesIntoA2MiBAlignedMapping) {
+  for (std::size_t size : {2 * kMiB, 2 * kMiB + 1, 7 * kMiB + 3, 64 * kMiB}) {
+    char* p = static_cast<char*>(::operator new(size));
+    EXPECT_EQ(address(p) % (2 * kMiB), 64u) << size;
+    std::memset(p, 0x5a, size);  // every byte is writable
+    EXPECT_EQ(p[size - 1], 0x5a);
+    ::operator delete(p);
+  }
+}
+
+TEST(LargePages, EverySizeAndAlignmentIsUsable) {
+  for (std::size_t size : {std::size_t{0}, std::size_t{1}, std::size_t{100}, kMiB, 3 * kMiB}) {
+    for (std::size_t align : {std::size_t{8}, std::size_t{16}, std::size_t{64}, std::size_t{4096}}) {
+      void* p = ::operator new(size, std::align_val_t{align});
+      EXPECT_EQ(address(p) % align, 0u) << size << " " << align;
+      if (size) std::memset(p, 1, size);
+      ::operator delete(p, std::align_val_t{align});
+    }
+  }
+  void* q = ::operator new(5 * kMiB, std::nothrow);
+  ASSERT_NE(q, nullptr);
+  ::operator delete(q, std::nothrow);
+}
+
+TEST(LargePages, ThreadsAllocateAndFreeLargeAndSmallBlocksTogether) {
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([t] {
+      for (int i = 0; i < 50; ++i) {
+        std::vector<std::uint64_t> big((i % 5 + 1) * kMiB / 2, static_cast<std::uint64_t>(t));
+        auto small = std::make_unique<int[]>(static_cast<std::size_t>(i) + 1);
+        small[0] = i;
+        EXPECT_EQ(big.back(), static_cast<std::uint64_t>(t));
+        EXPECT_EQ(small[0], i);
+      }
+    });
+  for (auto& th : threads) th.join();
+}
+
+TEST(LargePages, VectorsGrowAcrossTheThreshold) {
+  std::vector<double> v;
+  for (int i = 0; i < 3'000'000; ++i) v.push_back(i);  // 24 MB, through 2, 4, 8 and 16 MB
+  double sum = 0;
+  for (double x : v) sum += x;
+  EXPECT_EQ(sum, 3'000'000.0 * 2'999'999 / 2);
+}
+
+}  // namespace
