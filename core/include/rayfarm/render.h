@@ -46,12 +46,30 @@ inline constexpr int kRenderVersion = 4;
 constexpr long long kMaxPixels = 1LL << 28;
 constexpr long long kMaxSupersampledPixels = 1LL << 25;
 
+// Tiles [first, end) of an image in row-major order (32×32 pixels each, the last row and
+// column cut by the image's edge): the part of a job one node of a farm renders
+// (render_unit.h). Every pixel's samples depend on its position only, so the tiles of a range
+// come out as the same tiles of the whole image would.
+struct TileRange {
+  int first = 0;
+  int end = 0;
+  int count() const { return end - first; }
+};
+
+// How many tiles an image of this size has.
+int tile_count(int width, int height);
+
 class RenderJob {
  public:
   // Prepares the scene for these options. Returns nullptr with `error` set when the options
   // do not fit the scene (unknown camera).
   static std::unique_ptr<RenderJob> create(const Scene& scene, const RenderOptions& options,
                                            std::string* error);
+  // Renders only the tiles of `range`, every pass (the rest of image() stays black). A range
+  // cannot stop early: target_error and time_limit need the whole image's estimate after
+  // each pass, so such a job is refused (one node renders it whole).
+  static std::unique_ptr<RenderJob> create(const Scene& scene, const RenderOptions& options,
+                                           TileRange range, std::string* error);
   virtual ~RenderJob() = default;
 
   enum class Step { ran, wait, done };
@@ -67,6 +85,10 @@ class RenderJob {
   virtual Image image() const = 0;
   virtual int width() const = 0;
   virtual int height() const = 0;
+  virtual TileRange range() const = 0;
+  // Per tile of range(), in tile order: the summed squared standard errors of its pixels
+  // after the last pass (what the whole image's error_estimate adds up, in tile order).
+  virtual std::vector<double> tile_errors() const = 0;
 };
 
 // Renders on `threads` threads of its own (0: all cores). `on_progress` is called from a

@@ -28,13 +28,16 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
 template <class Pipeline>
 class TiledRender final : public RenderJob {
  public:
-  TiledRender(Pipeline pipeline, const RenderOptions& options, Film film, double prepare_ms)
+  TiledRender(Pipeline pipeline, const RenderOptions& options, Film film, TileRange range,
+              double prepare_ms)
       : p_(std::move(pipeline)),
         options_(options),
         film_(film),
         grid_(p_.width(), p_.height()),
+        range_(range),
         passes_(std::max(1, p_.spp() / p_.samples_per_pass())),
         image_(p_.width(), p_.height()),
+        next_tile_(range.first),
         prepare_ms_(prepare_ms) {
     if (passes_ > 1) {
       sum_.assign(static_cast<size_t>(p_.width()) * p_.height() * 3, 0.0);
@@ -52,9 +55,9 @@ class TiledRender final : public RenderJob {
         finish("canceled");
         return Step::done;
       }
-      if (next_tile_ == grid_.count()) return Step::wait;
-      if (next_tile_ == 0 && passes_done_ == 0) start_ = Clock::now();
-      if (next_tile_ == 0) pass_start_ = Clock::now();
+      if (next_tile_ == range_.end) return Step::wait;
+      if (next_tile_ == range_.first && passes_done_ == 0) start_ = Clock::now();
+      if (next_tile_ == range_.first) pass_start_ = Clock::now();
       tile = next_tile_++;
       pass = passes_done_;
     }
@@ -67,7 +70,7 @@ class TiledRender final : public RenderJob {
     reflection_ += counts.reflection;
     if (!complete || finished_) return finished_ ? Step::done : Step::ran;
     copy_tile(tile, bytes);
-    if (++done_in_pass_ == grid_.count()) end_pass();
+    if (++done_in_pass_ == range_.count()) end_pass();
     return Step::ran;
   }
 
@@ -79,6 +82,11 @@ class TiledRender final : public RenderJob {
   }
   int width() const override { return p_.width(); }
   int height() const override { return p_.height(); }
+  TileRange range() const override { return range_; }
+  std::vector<double> tile_errors() const override {
+    std::lock_guard lock(mu_);
+    return {tile_error_.begin() + range_.first, tile_error_.begin() + range_.end};
+  }
 
   Image image() const override {
     std::lock_guard lock(mu_);
@@ -92,12 +100,12 @@ class TiledRender final : public RenderJob {
     st.shadow_rays = shadow_;
     st.reflection_rays = reflection_;
     st.prepare_ms = prepare_ms_;
-    if (passes_done_ > 0 || done_in_pass_ > 0 || next_tile_ > 0)
+    if (passes_done_ > 0 || done_in_pass_ > 0 || next_tile_ > range_.first)
       st.render_ms = ms_between(start_, finished_ ? end_ : Clock::now());
     st.spp_done = passes_done_ * p_.samples_per_pass();
     st.spp_target = p_.spp();
     st.tiles_done = done_in_pass_;
-    st.tiles_per_pass = grid_.count();
+    st.tiles_per_pass = range_.count();
     st.error_estimate = error_;
     st.parts = p_.parts();
     st.stop_reason = stop_reason_;
@@ -169,7 +177,7 @@ class TiledRender final : public RenderJob {
              ms_between(start_, now) + pass_ms > options_.time_limit * 1000)
       finish("time_limit");
     else {
-      next_tile_ = 0;
+      next_tile_ = range_.first;
       done_in_pass_ = 0;
     }
   }
@@ -184,6 +192,7 @@ class TiledRender final : public RenderJob {
   const RenderOptions options_;
   const Film film_;
   const TileGrid grid_;
+  const TileRange range_;
   const int passes_;
 
   mutable std::mutex mu_;
@@ -256,25 +265,51 @@ std::optional<int> check_render(const Scene& scene, const RenderOptions& options
   return camera;
 }
 
+int tile_count(int width, int height) { return TileGrid(width, height).count(); }
+
 std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOptions& options,
                                              std::string* error) {
+  return create(scene, options, TileRange{0, -1}, error);
+}
+
+std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOptions& options,
+                                             TileRange range, std::string* error) {
   const std::optional<int> camera = check_render(scene, options, error);
   if (!camera) return nullptr;
+  const Camera& cam = scene.cameras[*camera];
+  const int tiles = tile_count(options.width > 0 ? options.width : cam.width,
+                               options.height > 0 ? options.height : cam.height);
+  if (range.end == -1 && range.first == 0) {
+    range.end = tiles;  // the whole image
+  } else {
+    if (range.first < 0 || range.first >= range.end || range.end > tiles) {
+      if (error)
+        *error = "tiles " + std::to_string(range.first) + " to " + std::to_string(range.end) +
+                 " are not a range of the image's " + std::to_string(tiles) + " tiles";
+      return nullptr;
+    }
+    if (range.count() < tiles && (options.target_error > 0 || options.time_limit > 0)) {
+      if (error)
+        *error = "a part of an image cannot stop at a target error or a time limit: those "
+                 "decide on the whole image after each pass";
+      return nullptr;
+    }
+  }
   const Clock::time_point t0 = Clock::now();
   const Film film{options.effective_rounding(), options.profile == Profile::cpsc102};
   if (options.profile == Profile::cpsc102) {
     cpsc102::ReferencePipeline pipeline(cpsc102::prepare_reference(scene, options, *camera));
     return std::make_unique<TiledRender<cpsc102::ReferencePipeline>>(
-        std::move(pipeline), options, film, ms_between(t0, Clock::now()));
+        std::move(pipeline), options, film, range, ms_between(t0, Clock::now()));
   }
   if (options.precision == Precision::f32) {
     LecturePipeline<float> pipeline(prepare_scene<float>(scene, options, *camera));
-    return std::make_unique<TiledRender<LecturePipeline<float>>>(std::move(pipeline), options,
-                                                                 film, ms_between(t0, Clock::now()));
+    return std::make_unique<TiledRender<LecturePipeline<float>>>(
+        std::move(pipeline), options, film, range, ms_between(t0, Clock::now()));
   }
   LecturePipeline<double> pipeline(prepare_scene<double>(scene, options, *camera));
-  return std::make_unique<TiledRender<LecturePipeline<double>>>(std::move(pipeline), options, film,
-                                                                ms_between(t0, Clock::now()));
+  return std::make_unique<TiledRender<LecturePipeline<double>>>(
+      std::move(pipeline), options, film, range, ms_between(t0, Clock::now()));
 }
 
 Image render_image(const Scene& scene, const RenderOptions& options, int threads,
