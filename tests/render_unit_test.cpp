@@ -19,13 +19,17 @@ RenderStats whole(const Scene& scene, const RenderOptions& o, Image* image) {
   return st;
 }
 
-// Each unit on its own job, encoded and decoded, assembled in a shuffled order.
+// Each unit on its own job (all from one prepared scene), encoded and decoded, assembled in a
+// shuffled order.
 Image by_units(const Scene& scene, const RenderOptions& o, const std::vector<TileRange>& units,
                RenderStats* st) {
   std::vector<std::string> shipped;
+  std::string error;
+  auto prepared = PreparedRender::create(scene, o, &error);  // one preparation for every unit
+  EXPECT_TRUE(prepared) << error;
+  if (!prepared) return {};
   for (TileRange range : units) {
-    std::string error;
-    auto job = RenderJob::create(scene, o, range, &error);
+    auto job = prepared->job(range, &error);
     EXPECT_TRUE(job) << error;
     if (!job) return {};
     while (job->run_step() != RenderJob::Step::done) {
@@ -36,7 +40,6 @@ Image by_units(const Scene& scene, const RenderOptions& o, const std::vector<Til
   std::shuffle(shipped.begin(), shipped.end(), rng);
   std::optional<UnitAssembler> a;
   for (const std::string& bytes : shipped) {
-    std::string error;
     auto unit = decode_unit(bytes, &error);
     EXPECT_TRUE(unit) << error;
     if (!unit) return {};

@@ -91,6 +91,21 @@ class RenderJob {
   virtual std::vector<double> tile_errors() const = 0;
 };
 
+// A scene prepared for one set of options (its acceleration structures built once), from
+// which any number of jobs for ranges of its tiles are made: a farm node renders many units
+// of one job. The scene must outlive it.
+class PreparedRender {
+ public:
+  static std::shared_ptr<const PreparedRender> create(const Scene& scene,
+                                                      const RenderOptions& options,
+                                                      std::string* error);
+  virtual ~PreparedRender() = default;
+  // A job for `range` (see RenderJob::create), or nullptr with `error` set.
+  virtual std::unique_ptr<RenderJob> job(TileRange range, std::string* error) const = 0;
+  virtual int tiles() const = 0;
+  virtual double prepare_ms() const = 0;
+};
+
 // Renders on `threads` threads of its own (0: all cores). `on_progress` is called from a
 // worker after each tile; `cancel` is polled. Returns an empty image with `error` set when
 // the job cannot start.

@@ -28,9 +28,10 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
 template <class Pipeline>
 class TiledRender final : public RenderJob {
  public:
-  TiledRender(Pipeline pipeline, const RenderOptions& options, Film film, TileRange range,
-              double prepare_ms)
-      : p_(std::move(pipeline)),
+  TiledRender(std::shared_ptr<const Pipeline> pipeline, const RenderOptions& options, Film film,
+              TileRange range, double prepare_ms)
+      : pipeline_(std::move(pipeline)),
+        p_(*pipeline_),
         options_(options),
         film_(film),
         grid_(p_.width(), p_.height()),
@@ -188,7 +189,8 @@ class TiledRender final : public RenderJob {
     end_ = Clock::now();
   }
 
-  const Pipeline p_;
+  const std::shared_ptr<const Pipeline> pipeline_;  // shared by the jobs of one PreparedRender
+  const Pipeline& p_;
   const RenderOptions options_;
   const Film film_;
   const TileGrid grid_;
@@ -272,44 +274,75 @@ std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOpt
   return create(scene, options, TileRange{0, -1}, error);
 }
 
-std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOptions& options,
-                                             TileRange range, std::string* error) {
-  const std::optional<int> camera = check_render(scene, options, error);
-  if (!camera) return nullptr;
-  const Camera& cam = scene.cameras[*camera];
-  const int tiles = tile_count(options.width > 0 ? options.width : cam.width,
-                               options.height > 0 ? options.height : cam.height);
-  if (range.end == -1 && range.first == 0) {
-    range.end = tiles;  // the whole image
-  } else {
-    if (range.first < 0 || range.first >= range.end || range.end > tiles) {
+namespace {
+
+template <class Pipeline>
+class PreparedPipeline final : public PreparedRender {
+ public:
+  PreparedPipeline(Pipeline pipeline, const RenderOptions& options, double prepare_ms)
+      : pipeline_(std::make_shared<const Pipeline>(std::move(pipeline))),
+        options_(options),
+        film_{options.effective_rounding(), options.profile == Profile::cpsc102},
+        tiles_(tile_count(pipeline_->width(), pipeline_->height())),
+        prepare_ms_(prepare_ms) {}
+
+  std::unique_ptr<RenderJob> job(TileRange range, std::string* error) const override {
+    if (range.first < 0 || range.first >= range.end || range.end > tiles_) {
       if (error)
         *error = "tiles " + std::to_string(range.first) + " to " + std::to_string(range.end) +
-                 " are not a range of the image's " + std::to_string(tiles) + " tiles";
+                 " are not a range of the image's " + std::to_string(tiles_) + " tiles";
       return nullptr;
     }
-    if (range.count() < tiles && (options.target_error > 0 || options.time_limit > 0)) {
+    if (range.count() < tiles_ && (options_.target_error > 0 || options_.time_limit > 0)) {
       if (error)
         *error = "a part of an image cannot stop at a target error or a time limit: those "
                  "decide on the whole image after each pass";
       return nullptr;
     }
+    return std::make_unique<TiledRender<Pipeline>>(pipeline_, options_, film_, range, prepare_ms_);
   }
+  int tiles() const override { return tiles_; }
+  double prepare_ms() const override { return prepare_ms_; }
+
+ private:
+  std::shared_ptr<const Pipeline> pipeline_;
+  RenderOptions options_;
+  Film film_;
+  int tiles_;
+  double prepare_ms_;
+};
+
+template <class Pipeline>
+std::shared_ptr<const PreparedRender> prepared(Pipeline pipeline, const RenderOptions& options,
+                                               Clock::time_point t0) {
+  return std::make_shared<PreparedPipeline<Pipeline>>(std::move(pipeline), options,
+                                                      ms_between(t0, Clock::now()));
+}
+
+}  // namespace
+
+std::shared_ptr<const PreparedRender> PreparedRender::create(const Scene& scene,
+                                                             const RenderOptions& options,
+                                                             std::string* error) {
+  const std::optional<int> camera = check_render(scene, options, error);
+  if (!camera) return nullptr;
   const Clock::time_point t0 = Clock::now();
-  const Film film{options.effective_rounding(), options.profile == Profile::cpsc102};
-  if (options.profile == Profile::cpsc102) {
-    cpsc102::ReferencePipeline pipeline(cpsc102::prepare_reference(scene, options, *camera));
-    return std::make_unique<TiledRender<cpsc102::ReferencePipeline>>(
-        std::move(pipeline), options, film, range, ms_between(t0, Clock::now()));
-  }
-  if (options.precision == Precision::f32) {
-    LecturePipeline<float> pipeline(prepare_scene<float>(scene, options, *camera));
-    return std::make_unique<TiledRender<LecturePipeline<float>>>(
-        std::move(pipeline), options, film, range, ms_between(t0, Clock::now()));
-  }
-  LecturePipeline<double> pipeline(prepare_scene<double>(scene, options, *camera));
-  return std::make_unique<TiledRender<LecturePipeline<double>>>(
-      std::move(pipeline), options, film, range, ms_between(t0, Clock::now()));
+  if (options.profile == Profile::cpsc102)
+    return prepared(cpsc102::ReferencePipeline(cpsc102::prepare_reference(scene, options, *camera)),
+                    options, t0);
+  if (options.precision == Precision::f32)
+    return prepared(LecturePipeline<float>(prepare_scene<float>(scene, options, *camera)),
+                    options, t0);
+  return prepared(LecturePipeline<double>(prepare_scene<double>(scene, options, *camera)),
+                  options, t0);
+}
+
+std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOptions& options,
+                                             TileRange range, std::string* error) {
+  auto prepared = PreparedRender::create(scene, options, error);
+  if (!prepared) return nullptr;
+  if (range.first == 0 && range.end == -1) range.end = prepared->tiles();
+  return prepared->job(range, error);
 }
 
 Image render_image(const Scene& scene, const RenderOptions& options, int threads,
