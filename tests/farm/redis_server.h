@@ -29,6 +29,7 @@ class RedisServer {
   // SIGKILL, as a crash: nothing is flushed beyond what the AOF already has.
   void kill9();
   bool running() const { return pid_ > 0; }
+  int pid() const { return pid_; }
 
   const std::string& dir() const { return dir_; }
   std::string socket() const { return dir_ + "/r.sock"; }
