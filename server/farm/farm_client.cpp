@@ -62,9 +62,6 @@ Status create_work_group(Connection& c, std::string_view prefix) {
 }
 
 Status FarmSetup::on_connect(Connection& c) {
-  if (auto r = c.command({"FUNCTION", "LOAD", "REPLACE", function_library()}); !r)
-    return r.error();
-  if (auto s = create_work_group(c, config_.prefix); !s) return s;
   std::string fresh;
   {
     std::random_device rd;
@@ -72,9 +69,14 @@ Status FarmSetup::on_connect(Connection& c) {
     for (int i = 0; i < 4; ++i) std::snprintf(buf + 8 * i, 9, "%08x", rd());
     fresh.assign(buf, 32);
   }
+  // The build check comes before FUNCTION LOAD REPLACE: a node of another build must not
+  // replace the library the farm runs.
   FarmClient client(c, config_);
   auto joined = client.join(fresh);
   if (!joined) return joined.error();
+  if (auto r = c.command({"FUNCTION", "LOAD", "REPLACE", function_library()}); !r)
+    return r.error();
+  if (auto s = create_work_group(c, config_.prefix); !s) return s;
   std::lock_guard lock(mutex_);
   if (epoch_.empty()) {
     epoch_ = joined->epoch;
@@ -110,10 +112,18 @@ Result<Reply> FarmClient::fcall(std::string_view function, std::vector<std::stri
 }
 
 Result<JoinResult> FarmClient::join(std::string_view fresh_epoch) {
-  auto r = fcall("rf1_join", {config_.build, fresh_epoch});
-  if (!r) return r.error();
-  if (r->size() != 2) return unexpected("rf1_join", "shape");
-  return JoinResult{std::string((*r)[0].str()), (*r)[1].str() == "created"};
+  // SET NX GET (7.0): sets the key if absent and answers the value it had, in one command.
+  const std::string build_key = key("meta:build"), epoch_key = key("meta:epoch");
+  auto build = c_.command({"SET", build_key, config_.build, "NX", "GET"});
+  if (!build) return build.error();
+  if (auto have = build->string(); have && *have != config_.build)
+    return Error{ErrorKind::Build, "this farm runs build " + std::string(*have) +
+                                       ", this node is " + config_.build +
+                                       ": images would not be byte-identical"};
+  auto epoch = c_.command({"SET", epoch_key, fresh_epoch, "NX", "GET"});
+  if (!epoch) return epoch.error();
+  if (auto have = epoch->string()) return JoinResult{std::string(*have), false};
+  return JoinResult{std::string(fresh_epoch), true};
 }
 
 Result<SubmitResult> FarmClient::submit(const SubmitRequest& q) {

@@ -131,6 +131,9 @@ class FarmClient {
   FarmClient(Connection& connection, FarmConfig config)
       : c_(connection), config_(std::move(config)) {}
 
+  // Checks the build (rf:meta:build; the first node sets it) and reads the epoch
+  // (rf:meta:epoch), setting it to `fresh_epoch` when Redis has none. Plain commands, not a
+  // Function: it runs before the library is loaded.
   Result<JoinResult> join(std::string_view fresh_epoch);
   Result<SubmitResult> submit(const SubmitRequest& request);
   // Feeds the stream fairly and hands this node the next wanted unit, or nullopt.

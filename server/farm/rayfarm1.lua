@@ -138,21 +138,6 @@ local function retry_or_fail(P, job, unit, try, max_tries, why)
   return 'requeued'
 end
 
--- ARGV: P, build, epoch_if_new -> {epoch, 'created'|'existing'}
--- A node of another build refuses to join: bytes must match across the farm.
-local function join(_, a)
-  local P, build, fresh = a[1], a[2], a[3]
-  local have = redis.call('GET', P .. 'meta:build')
-  if have and have ~= build then
-    return redis.error_reply('BUILD this farm runs build ' .. have .. ', this node is ' .. build)
-  end
-  if not have then redis.call('SET', P .. 'meta:build', build) end
-  local epoch = redis.call('GET', P .. 'meta:epoch')
-  if epoch then return {epoch, 'existing'} end
-  redis.call('SET', P .. 'meta:epoch', fresh)
-  return {fresh, 'created'}
-end
-
 -- ARGV: P, job, client, prio, units, max_active, max_jobs, target, ttl_ms, idem_key,
 --       idem_ttl_ms, opts -> {'accepted'|'exists'|'limit'|'full', job}
 -- units = 0: a local job, rendered by the accepting node and ended with rf1_record; it counts
@@ -428,7 +413,6 @@ end
 local function reg(name, fn, flags)
   redis.register_function{function_name = name, callback = fn, flags = flags or {}}
 end
-reg('rf1_join', join)
 reg('rf1_submit', submit)
 reg('rf1_take', take)
 reg('rf1_adopt', adopt)

@@ -34,7 +34,6 @@ ErrorKind classify_error_reply(std::string_view message) {
   if (word == "LOADING") return ErrorKind::Loading;
   if (word == "READONLY") return ErrorKind::ReadOnly;
   if (word == "WRONGPASS" || word == "NOAUTH") return ErrorKind::Auth;
-  if (word == "BUILD") return ErrorKind::Build;
   // An error raised by a command inside a Function keeps the command's prefix.
   if (message.find("OOM command not allowed") != std::string_view::npos) return ErrorKind::Oom;
   return ErrorKind::Reply;

@@ -358,7 +358,8 @@ TEST_F(FarmFunctions, AdoptSkipsAnEntryWhoseJobWasCanceled) {
 
 TEST_F(FarmFunctions, ANodeOfAnotherBuildIsRefused) {
   TestNode n = node("n1");
-  ASSERT_TRUE(n.conn->connect());
+  Status joined = n.conn->connect();
+  ASSERT_TRUE(joined) << joined.error().message;
   FarmConfig other = config("n2");
   other.build = "other-build";
   TestNode stranger = node(other);

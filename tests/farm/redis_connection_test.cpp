@@ -43,7 +43,8 @@ TEST_F(RedisConnection, UnitResultsWithNulBytesRoundTripThroughTheFunctions) {
   q.job = "j";
   q.client = "A";
   q.opts = std::string("o\0pts", 5);
-  ASSERT_TRUE(farm.submit(q));
+  auto submitted = farm.submit(q);
+  ASSERT_TRUE(submitted) << to_string(submitted.error().kind) << ": " << submitted.error().message;
   auto u = farm.take();
   ASSERT_TRUE(u && *u) << (u ? "none" : u.error().message);
   EXPECT_EQ((*u)->opts, q.opts);
@@ -67,6 +68,28 @@ TEST_F(RedisConnection, PipelinesManyCommandsAndKeepsPerCommandErrors) {
   EXPECT_FALSE((*r)[100]);
   EXPECT_EQ((*r)[100].error().kind, ErrorKind::Reply);
   EXPECT_EQ((*r)[101]->str(), "100");
+}
+
+TEST_F(RedisConnection, ATimeoutLeavesTheOutcomeUnknownAndTheNextCommandReconnects) {
+  RedisServer server;
+  ASSERT_TRUE(server.start());
+  ConnectOptions o = server.options();
+  o.command_timeout = 100ms;
+  o.backoff_initial = 1ms;
+  Connection c(o);
+  auto r = c.command({"BLPOP", "nothing", "2"});
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().kind, ErrorKind::Timeout) << r.error().message;
+  EXPECT_TRUE(r.error().outcome_unknown());
+  EXPECT_FALSE(c.connected());
+  std::this_thread::sleep_for(5ms);
+  EXPECT_TRUE(c.command({"PING"}));
+  // A longer timeout for one blocking command, then the usual one again.
+  const std::string_view blpop[] = {"BLPOP", "nothing", "0.3"};
+  auto waited = c.command(blpop, 1000ms);
+  ASSERT_TRUE(waited) << waited.error().message;
+  EXPECT_TRUE(waited->is_nil());
+  EXPECT_EQ(c.connects(), 2u);
 }
 
 TEST_F(RedisConnection, ANewConnectionWaitsForItsBackoffAndReportsUnavailable) {
@@ -191,6 +214,29 @@ TEST_F(RedisConnection, AFullRedisGivesOomAndKeepsLeasesAndCancelsWorking) {
   ASSERT_TRUE(canceled) << canceled.error().message;
   EXPECT_EQ(canceled->status, CancelStatus::Canceled);
   EXPECT_TRUE(n.conn->command({"PING"}));
+}
+
+TEST_F(RedisConnection, TellsBusyAndNoGroupFromOtherErrors) {
+  RedisServer server({"--busy-reply-threshold", "50"});
+  ASSERT_TRUE(server.start());
+  Connection c(server.options());
+  auto nogroup = c.command({"XREADGROUP", "GROUP", "g", "c", "STREAMS", "nostream", ">"});
+  ASSERT_FALSE(nogroup);
+  EXPECT_EQ(nogroup.error().kind, ErrorKind::NoGroup);
+  std::thread busy([&] {
+    Connection s(server.options());
+    // A script that runs for 400 ms of server time.
+    (void)s.command({"EVAL",
+                     "local t0 = redis.call('TIME') repeat local t = redis.call('TIME') until "
+                     "(t[1] - t0[1]) * 1000000 + t[2] - t0[2] > 400000 return 1",
+                     "0"});
+  });
+  std::this_thread::sleep_for(200ms);
+  auto r = c.command({"PING"});
+  busy.join();
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().kind, ErrorKind::Busy) << r.error().message;
+  EXPECT_TRUE(c.command({"PING"}));
 }
 
 TEST_F(RedisConnection, APoolLendsEachConnectionToOneThreadAtATime) {
