@@ -220,6 +220,15 @@ Result<ReleaseStatus> FarmClient::release(const Unit& u) {
                                     {"gone", ReleaseStatus::Gone}});
 }
 
+Result<std::vector<std::string>> FarmClient::held_entries(int count) {
+  const std::string stream = key("work"), n = std::to_string(count);
+  auto r = c_.command({"XPENDING", stream, "render", "-", "+", n, config_.node});
+  if (!r) return r.error();
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < r->size(); ++i) out.emplace_back((*r)[i][0].str());
+  return out;
+}
+
 Result<ReclaimResult> FarmClient::reclaim(std::string_view janitor, std::chrono::milliseconds lease,
                                           std::string_view cursor, int count) {
   const std::string l = ms(lease), tries = std::to_string(config_.max_tries);

@@ -148,6 +148,10 @@ class FarmClient {
   Result<CompleteStatus> complete(const Unit& unit, std::string_view payload);
   Result<FailStatus> fail(const Unit& unit, std::string_view error);
   Result<ReleaseStatus> release(const Unit& unit);
+  // The entries this node holds according to Redis (its PEL), oldest first. After a take whose
+  // reply was lost (a timeout), Redis holds an entry the node does not know: release those, or
+  // the reclaim would count a try the unit never had.
+  Result<std::vector<std::string>> held_entries(int count = 100);
   Result<ReclaimResult> reclaim(std::string_view janitor, std::chrono::milliseconds lease,
                                 std::string_view cursor = "0-0", int count = 64);
   Result<CancelResult> cancel(std::string_view job, std::string_view client);

@@ -12,6 +12,15 @@
 --    states, so the C++ side maps them to enums in one place.
 --  * The work stream is never trimmed: acked entries are XDELed, so
 --    XLEN - XPENDING = entries not yet delivered.
+--
+-- Keys under P: job:{id} (hash: state queued|running|assembling|done|failed|canceled, client,
+-- prio, units, fed, done, created/started/finished_ms, ttl_ms, opts, result, error, assembler,
+-- local), tiles:{id} (hash unit -> result), client:{c} (hash: active), cjobs:{c} (zset),
+-- queued/running/assembling (zsets by ms), ring:{p} (list of clients with unfed units),
+-- cj:{p}:{c} (list of that client's jobs with unfed units), work (stream, group 'render':
+-- {job, unit, try}), idem:{c}:{key} (string -> job id), node:{n} (string, PX), nodes (zset),
+-- lock:janitor; meta:build and meta:epoch are set by the client before the library loads.
+-- Channels: P..'events' ("job state done total"), P..'cancel' (job ids).
 local G = 'render'
 
 local function now_ms()

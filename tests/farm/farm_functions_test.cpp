@@ -241,6 +241,23 @@ TEST_F(FarmFunctions, ReleaseRequeuesAtOnceWithTheSameTry) {
   EXPECT_NE((*again)->entry, (*u)->entry);
 }
 
+TEST_F(FarmFunctions, AnEntryWhoseTakeReplyWasLostCanBeFoundAndReleased) {
+  TestNode n = node("n1");
+  submit(n, "j", "A", 1);
+  auto lost = n->take();  // as if the reply never arrived
+  ASSERT_TRUE(lost && *lost);
+  auto held = n->held_entries();
+  ASSERT_TRUE(held) << held.error().message;
+  ASSERT_EQ(*held, std::vector<std::string>{(*lost)->entry});
+  Unit u;
+  u.entry = held->front();
+  EXPECT_EQ(*n->release(u), ReleaseStatus::Requeued);
+  auto again = n->take();
+  ASSERT_TRUE(again && *again);
+  EXPECT_EQ((*again)->tries, 0);
+  EXPECT_EQ(n->held_entries()->size(), 1u);
+}
+
 TEST_F(FarmFunctions, FeedingNeverExceedsTheTarget) {
   TestNode n = node("n1", 3);
   submit(n, "a", "A", 10);
