@@ -74,8 +74,7 @@ Status FarmSetup::on_connect(Connection& c) {
   FarmClient client(c, config_);
   auto joined = client.join(fresh);
   if (!joined) return joined.error();
-  if (auto r = c.command({"FUNCTION", "LOAD", "REPLACE", function_library()}); !r)
-    return r.error();
+  if (auto r = c.command({"FUNCTION", "LOAD", "REPLACE", function_library()}); !r) return r.error();
   if (auto s = create_work_group(c, config_.prefix); !s) return s;
   std::lock_guard lock(mutex_);
   if (epoch_.empty()) {
@@ -164,8 +163,8 @@ Result<std::optional<Unit>> FarmClient::take() {
 
 Result<std::optional<Unit>> FarmClient::block_for_work() {
   const std::string stream = key("work"), block = ms(config_.block);
-  const std::string_view argv[] = {"XREADGROUP", "GROUP", "render", config_.node, "COUNT", "1",
-                                   "BLOCK", block, "STREAMS", stream, ">"};
+  const std::string_view argv[] = {"XREADGROUP", "GROUP", "render",  config_.node, "COUNT", "1",
+                                   "BLOCK",      block,   "STREAMS", stream,       ">"};
   // The socket timeout must outlast the block, or every idle wait would drop the connection.
   auto r = c_.command(argv, config_.block + c_.options().command_timeout);
   if (!r && r.error().kind == ErrorKind::NoGroup) {
@@ -206,7 +205,8 @@ Result<CompleteStatus> FarmClient::complete(const Unit& u, std::string_view payl
 
 Result<FailStatus> FarmClient::fail(const Unit& u, std::string_view error) {
   const std::string tries = std::to_string(config_.max_tries);
-  return word_reply<FailStatus>("rf1_fail", fcall("rf1_fail", {config_.node, u.entry, tries, error}),
+  return word_reply<FailStatus>("rf1_fail",
+                                fcall("rf1_fail", {config_.node, u.entry, tries, error}),
                                 {{"requeued", FailStatus::Requeued},
                                  {"failed", FailStatus::JobFailed},
                                  {"drop", FailStatus::Dropped},
@@ -270,8 +270,8 @@ Result<RecordStatus> FarmClient::record(const RecordRequest& q) {
   const char* state = q.state == EndState::Done     ? "done"
                       : q.state == EndState::Failed ? "failed"
                                                     : "canceled";
-  std::vector<std::string_view> args{config_.node, q.job, q.client, prio, state, ttl, q.result,
-                                     q.error};
+  std::vector<std::string_view> args{config_.node, q.job, q.client, prio,
+                                     state,        ttl,   q.result, q.error};
   for (const auto& [k, v] : q.fields) {
     args.push_back(k);
     args.push_back(v);

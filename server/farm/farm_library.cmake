@@ -7,7 +7,7 @@ math(EXPR size "${hex_length} / 2")
 string(REGEX REPLACE "([0-9a-f][0-9a-f])" "0x\\1," bytes "${hex}")
 string(REPEAT "0x[0-9a-f][0-9a-f]," 24 line)
 string(REGEX REPLACE "(${line})" "\\1\n    " bytes "${bytes}")
-file(CONFIGURE OUTPUT "${OUT}.tmp" @ONLY CONTENT [==[// Generated from server/farm/rayfarm1.lua by farm_library.cmake at build time: do not edit.
+file(CONFIGURE OUTPUT "${OUT}.tmp" @ONLY CONTENT [==[// Generated from rayfarm1.lua by farm_library.cmake at build time: do not edit.
 #include "farm_client.h"
 
 namespace rayfarm::farm {

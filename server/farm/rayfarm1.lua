@@ -337,8 +337,9 @@ local function reclaim(_, a)
     ack_delete(P, id)
     if f and wanted(P, f[2], f[4]) then
       local try = tonumber(f[6]) + 1
-      local res = retry_or_fail(P, f[2], f[4], try, max_tries, 'unit ' .. f[4] ..
-                                ' was abandoned ' .. try .. ' times: a node died or stalled on it each time')
+      local why = 'unit ' .. f[4] .. ' was abandoned ' .. try ..
+                  ' times: a node died or stalled on it each time'
+      local res = retry_or_fail(P, f[2], f[4], try, max_tries, why)
       if res == 'failed' then failed = failed + 1 else requeued = requeued + 1 end
     end
   end
@@ -357,7 +358,8 @@ local function cancel(_, a)
   return {'canceled', 'canceled'}
 end
 
--- ARGV: P, node, job, result_key, field, value, ... -> {'done'|'already_done'|'not_assembling', state}
+-- ARGV: P, node, job, result_key, field, value, ...
+--   -> {'done'|'already_done'|'not_assembling', state}
 -- Only from assembling: a canceled or failed job stays so.
 local function finish(_, a)
   local P, job, result = a[1], a[3], a[4]

@@ -62,7 +62,8 @@ void Connection::schedule_retry() {
 }
 
 Status Connection::set_timeout(milliseconds t) {
-  if (redisSetTimeout(ctx_, to_timeval(t)) != REDIS_OK) return context_error("setting the timeout on");
+  if (redisSetTimeout(ctx_, to_timeval(t)) != REDIS_OK)
+    return context_error("setting the timeout on");
   return Ok{};
 }
 
@@ -118,7 +119,8 @@ Status Connection::connect() {
 
 Status Connection::ensure_connected() {
   if (ctx_) return Ok{};
-  if (connecting_) return Error{ErrorKind::Unavailable, "the connection was lost while setting it up"};
+  if (connecting_)
+    return Error{ErrorKind::Unavailable, "the connection was lost while setting it up"};
   const auto now = Clock::now();
   if (failures_ > 0 && now < next_attempt_) {
     const auto wait = std::chrono::duration_cast<milliseconds>(next_attempt_ - now).count();
@@ -134,7 +136,8 @@ Status Connection::wait_connected(milliseconds max_wait) {
   for (;;) {
     Status s = ensure_connected();
     if (s || setup_error(s.error().kind) || Clock::now() >= deadline) return s;
-    std::this_thread::sleep_until(std::min(deadline, std::max(next_attempt_, Clock::now() + milliseconds(1))));
+    std::this_thread::sleep_until(
+        std::min(deadline, std::max(next_attempt_, Clock::now() + milliseconds(1))));
   }
 }
 
@@ -200,7 +203,8 @@ Result<std::vector<Result<Reply>>> Connection::pipeline(
   for (std::size_t i = 0; i < cmds.size(); ++i) {
     void* raw = nullptr;
     errno = 0;
-    if (redisGetReply(ctx_, &raw) != REDIS_OK || !raw) return context_error("lost the connection to");
+    if (redisGetReply(ctx_, &raw) != REDIS_OK || !raw)
+      return context_error("lost the connection to");
     Reply reply(static_cast<redisReply*>(raw));
     if (reply.type() == ReplyView::Type::ErrorReply)
       out.emplace_back(Error{classify_error_reply(reply.str()), std::string(reply.str())});
@@ -234,9 +238,8 @@ std::size_t Pool::size() const { return state_->size; }
 Result<Pool::Lease> Pool::acquire(milliseconds wait) {
   State& s = *state_;
   std::unique_lock lock(s.mutex);
-  const bool got = s.returned.wait_for(lock, wait, [&] {
-    return !s.idle.empty() || s.connections.size() < s.size;
-  });
+  const bool got = s.returned.wait_for(
+      lock, wait, [&] { return !s.idle.empty() || s.connections.size() < s.size; });
   if (!got)
     return Error{ErrorKind::Unavailable,
                  "all " + std::to_string(s.size) + " Redis connections are busy"};

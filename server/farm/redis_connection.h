@@ -109,7 +109,9 @@ class Pool {
  public:
   class Lease {
    public:
-    Lease(Lease&& other) noexcept : pool_(other.pool_), index_(other.index_) { other.pool_ = nullptr; }
+    Lease(Lease&& other) noexcept : pool_(other.pool_), index_(other.index_) {
+      other.pool_ = nullptr;
+    }
     Lease& operator=(Lease&&) = delete;
     ~Lease();
     Connection& operator*() const;

@@ -6,21 +6,36 @@ namespace rayfarm::farm {
 
 const char* to_string(ErrorKind kind) {
   switch (kind) {
-    case ErrorKind::Config: return "config";
-    case ErrorKind::Unavailable: return "unavailable";
-    case ErrorKind::ConnectionLost: return "connection lost";
-    case ErrorKind::Timeout: return "timeout";
-    case ErrorKind::Protocol: return "protocol";
-    case ErrorKind::Auth: return "auth";
-    case ErrorKind::Oom: return "oom";
-    case ErrorKind::NoPerm: return "noperm";
-    case ErrorKind::NoGroup: return "nogroup";
-    case ErrorKind::Busy: return "busy";
-    case ErrorKind::Loading: return "loading";
-    case ErrorKind::ReadOnly: return "readonly";
-    case ErrorKind::Build: return "build";
-    case ErrorKind::Reply: return "reply";
-    case ErrorKind::Unexpected: return "unexpected";
+    case ErrorKind::Config:
+      return "config";
+    case ErrorKind::Unavailable:
+      return "unavailable";
+    case ErrorKind::ConnectionLost:
+      return "connection lost";
+    case ErrorKind::Timeout:
+      return "timeout";
+    case ErrorKind::Protocol:
+      return "protocol";
+    case ErrorKind::Auth:
+      return "auth";
+    case ErrorKind::Oom:
+      return "oom";
+    case ErrorKind::NoPerm:
+      return "noperm";
+    case ErrorKind::NoGroup:
+      return "nogroup";
+    case ErrorKind::Busy:
+      return "busy";
+    case ErrorKind::Loading:
+      return "loading";
+    case ErrorKind::ReadOnly:
+      return "readonly";
+    case ErrorKind::Build:
+      return "build";
+    case ErrorKind::Reply:
+      return "reply";
+    case ErrorKind::Unexpected:
+      return "unexpected";
   }
   return "?";
 }

@@ -11,21 +11,21 @@
 namespace rayfarm::farm {
 
 enum class ErrorKind {
-  Config,         // a bad URL, an unreadable password file: fix the settings
-  Unavailable,    // not connected (refused, or waiting for the next reconnect attempt)
-  ConnectionLost, // I/O error or EOF during a command: its outcome is unknown
-  Timeout,        // no reply in time: the outcome is unknown, the connection is dropped
-  Protocol,       // a reply hiredis could not parse; the connection is dropped
-  Auth,           // AUTH refused (WRONGPASS) or needed (NOAUTH)
-  Oom,            // "OOM command not allowed": Redis is at maxmemory
-  NoPerm,         // the ACL user may not run the command
-  NoGroup,        // the stream or its consumer group is gone (flushed)
-  Busy,           // a script is running past busy-reply-threshold
-  Loading,        // Redis is still loading its data set (retried until a deadline)
-  ReadOnly,       // talking to a replica
-  Build,          // the farm runs another build: this node must not join
-  Reply,          // any other error reply
-  Unexpected,     // a reply of an unexpected shape (a bug on one side)
+  Config,          // a bad URL, an unreadable password file: fix the settings
+  Unavailable,     // not connected (refused, or waiting for the next reconnect attempt)
+  ConnectionLost,  // I/O error or EOF during a command: its outcome is unknown
+  Timeout,         // no reply in time: the outcome is unknown, the connection is dropped
+  Protocol,        // a reply hiredis could not parse; the connection is dropped
+  Auth,            // AUTH refused (WRONGPASS) or needed (NOAUTH)
+  Oom,             // "OOM command not allowed": Redis is at maxmemory
+  NoPerm,          // the ACL user may not run the command
+  NoGroup,         // the stream or its consumer group is gone (flushed)
+  Busy,            // a script is running past busy-reply-threshold
+  Loading,         // Redis is still loading its data set (retried until a deadline)
+  ReadOnly,        // talking to a replica
+  Build,           // the farm runs another build: this node must not join
+  Reply,           // any other error reply
+  Unexpected,      // a reply of an unexpected shape (a bug on one side)
 };
 
 const char* to_string(ErrorKind kind);

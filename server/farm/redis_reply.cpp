@@ -9,12 +9,18 @@ void Reply::Free::operator()(redisReply* r) const { freeReplyObject(r); }
 ReplyView::Type ReplyView::type() const {
   if (!r_) return Type::Nil;
   switch (r_->type) {
-    case REDIS_REPLY_STRING: return Type::String;
-    case REDIS_REPLY_ARRAY: return Type::Array;
-    case REDIS_REPLY_INTEGER: return Type::Integer;
-    case REDIS_REPLY_STATUS: return Type::SimpleString;
-    case REDIS_REPLY_ERROR: return Type::ErrorReply;
-    default: return Type::Nil;
+    case REDIS_REPLY_STRING:
+      return Type::String;
+    case REDIS_REPLY_ARRAY:
+      return Type::Array;
+    case REDIS_REPLY_INTEGER:
+      return Type::Integer;
+    case REDIS_REPLY_STATUS:
+      return Type::SimpleString;
+    case REDIS_REPLY_ERROR:
+      return Type::ErrorReply;
+    default:
+      return Type::Nil;
   }
 }
 

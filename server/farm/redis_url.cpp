@@ -32,24 +32,30 @@ Result<RedisUrl> parse_redis_url(std::string_view url) {
     out.transport = RedisUrl::Transport::Unix;
     out.path = std::string(url.substr(7));
     if (out.path.empty() || out.path[0] != '/')
-      return config("Redis URL " + shown + ": a unix socket needs an absolute path (unix:///run/redis.sock)");
+      return config("Redis URL " + shown +
+                    ": a unix socket needs an absolute path (unix:///run/redis.sock)");
     if (out.path.find('?') != std::string::npos || out.path.find('@') != std::string::npos)
-      return config("Redis URL unix://…: options and users are not supported on a unix socket URL");
-    if (out.path.size() > 107) return config("Redis URL: the unix socket path is longer than 107 bytes");
+      return config("Redis URL unix://…: a unix socket URL takes no options and no user");
+    if (out.path.size() > 107)
+      return config("Redis URL: the unix socket path is longer than 107 bytes");
     return out;
   }
   if (url.starts_with("rediss://"))
-    return config("Redis URL: TLS (rediss://) is not supported by hiredis 0.14; use stunnel or a private network");
+    return config(
+        "Redis URL: TLS (rediss://) is not supported by hiredis 0.14; use stunnel or a private "
+        "network");
   if (!url.starts_with("redis://"))
-    return config("Redis URL " + shown + ": expected redis://[user@]host[:port][/db] or unix:///path");
+    return config("Redis URL " + shown +
+                  ": expected redis://[user@]host[:port][/db] or unix:///path");
   std::string_view rest = url.substr(8);
   std::string_view authority = rest.substr(0, rest.find('/'));
   std::string_view path = rest.size() > authority.size() ? rest.substr(authority.size() + 1) : "";
   if (auto at = authority.rfind('@'); at != std::string_view::npos) {
     std::string_view userinfo = authority.substr(0, at);
     if (userinfo.find(':') != std::string_view::npos)
-      return config("Redis URL: a password in the URL is refused (it would show in ps and logs); "
-                    "put it in --redis-password-file or RAYFARM_REDIS_PASSWORD");
+      return config(
+          "Redis URL: a password in the URL is refused (it would show in ps and logs); "
+          "put it in --redis-password-file or RAYFARM_REDIS_PASSWORD");
     if (userinfo.empty()) return config("Redis URL: empty user before '@'");
     out.user = std::string(userinfo);
     authority = authority.substr(at + 1);

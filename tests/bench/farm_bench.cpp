@@ -1,7 +1,8 @@
 // How many units per second one Redis sustains: K threads, each with its own connection (as a
 // node's fetcher/completer threads would), run take -> complete with zero render work, plus a
 // heartbeat every second, against one redis-server this program starts on a unix socket.
-// Prints units/s, p50/p99 latency of take and complete, and Redis's CPU use, for K = 1..32.
+// Prints units/s, p50/p99 latency of take and complete, and Redis's CPU use (in all and per
+// unit), for K = 1..32.
 //   rayfarm_farm_bench [seconds per K = 2] [payload bytes = 4096]
 #include <signal.h>
 #include <unistd.h>
@@ -68,11 +69,12 @@ int main(int argc, char** argv) {
     return 1;
   }
   const std::string payload(payload_bytes, 'p');
-  std::printf("one redis-server 7.0 (unix socket, AOF everysec), zero render work, %zu-byte "
-              "results, %.1f s per row\n",
-              payload_bytes, seconds);
-  std::printf("%3s %10s %10s %10s %12s %12s %10s\n", "K", "units/s", "take p50", "take p99",
-              "complete p50", "complete p99", "redis CPU");
+  std::printf(
+      "one redis-server 7.0 (unix socket, AOF everysec), zero render work, %zu-byte "
+      "results, %.1f s per row\n",
+      payload_bytes, seconds);
+  std::printf("%3s %10s %10s %10s %12s %12s %10s %14s\n", "K", "units/s", "take p50", "take p99",
+              "complete p50", "complete p99", "redis CPU", "redis CPU/unit");
   for (int k : {1, 2, 4, 8, 16, 32}) {
     const std::string prefix = "b" + std::to_string(k) + ":";
     FarmConfig base;
@@ -122,8 +124,10 @@ int main(int argc, char** argv) {
           t0 = Clock::now();
           auto done = farm.complete(**u, payload);
           s.complete_us.push_back(us_since(t0));
-          if (!done) ++s.errors;
-          else ++s.units;
+          if (!done)
+            ++s.errors;
+          else
+            ++s.units;
           if (done && *done == CompleteStatus::Assemble) (void)farm.finish((*u)->job, "png");
           if (Clock::now() - last_beat > std::chrono::seconds(1)) {
             (void)farm.heartbeat("{}", std::chrono::milliseconds(3000), {});
@@ -146,10 +150,11 @@ int main(int argc, char** argv) {
       all.take_us.insert(all.take_us.end(), s.take_us.begin(), s.take_us.end());
       all.complete_us.insert(all.complete_us.end(), s.complete_us.begin(), s.complete_us.end());
     }
-    std::printf("%3d %10.0f %8.0f us %8.0f us %10.0f us %10.0f us %9.0f %%%s\n", k,
+    std::printf("%3d %10.0f %8.0f us %8.0f us %10.0f us %10.0f us %9.0f %% %11.0f us%s\n", k,
                 static_cast<double>(all.units) / wall, percentile(all.take_us, 0.5),
                 percentile(all.take_us, 0.99), percentile(all.complete_us, 0.5),
                 percentile(all.complete_us, 0.99), 100.0 * cpu / wall,
+                all.units ? 1e6 * cpu / static_cast<double>(all.units) : 0.0,
                 all.errors ? " (errors)" : "");
     std::fflush(stdout);
     // Free this row's keys before the next (the stream is shared by nothing else).

@@ -19,8 +19,8 @@ void FarmTest::TearDownTestSuite() {
 
 void FarmTest::SetUp() {
   RAYFARM_REQUIRE_REDIS_SERVER();
-  ASSERT_TRUE(server_ && server_->running()) << "redis-server did not start; see its log in "
-                                             << (server_ ? server_->dir() : "?");
+  ASSERT_TRUE(server_ && server_->running())
+      << "redis-server did not start; see its log in " << (server_ ? server_->dir() : "?");
   static std::atomic<int> counter{0};
   prefix_ = "t" + std::to_string(++counter) + ":";
 }

@@ -196,7 +196,8 @@ TEST_F(FarmFunctions, AUnitAbandonedThreeTimesFailsItsJobNamingTheUnit) {
   }
   auto job = *n->job("j");
   EXPECT_EQ(job->at("state"), "failed");
-  EXPECT_EQ(job->at("error"), "unit 0 was abandoned 3 times: a node died or stalled on it each time");
+  EXPECT_EQ(job->at("error"),
+            "unit 0 was abandoned 3 times: a node died or stalled on it each time");
   EXPECT_EQ(stream_length(), 0);
   EXPECT_EQ(pending(), 0);
   EXPECT_EQ(hget("client:A", "active"), "0");
@@ -304,7 +305,7 @@ TEST_F(FarmFunctions, FinishOnlyFromAssembling) {
   submit(n, "j", "A", 1);
   auto f = n->finish("j", "png:x");
   EXPECT_EQ(f->status, FinishStatus::NotAssembling);
-  EXPECT_EQ(f->state, "running");  // its unit was fed at submission
+  EXPECT_EQ(f->state, "running");                              // its unit was fed at submission
   EXPECT_FALSE(n->finish("j", "png:x", {{"state", "done"}}));  // the farm's own fields
   auto u = n->take();
   EXPECT_EQ(*n->complete(**u, "px"), CompleteStatus::Assemble);

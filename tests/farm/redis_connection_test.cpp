@@ -202,8 +202,10 @@ TEST_F(RedisConnection, AFullRedisGivesOomAndKeepsLeasesAndCancelsWorking) {
   for (int i = 0; i < 200 && !oom; ++i) {
     q.job = "j" + std::to_string(i);
     auto r = farm.submit(q);
-    if (r) ++accepted;
-    else oom = r.error();
+    if (r)
+      ++accepted;
+    else
+      oom = r.error();
   }
   ASSERT_TRUE(oom) << "maxmemory was never reached";
   EXPECT_EQ(oom->kind, ErrorKind::Oom) << oom->message;

@@ -67,10 +67,25 @@ bool RedisServer::start() {
   ::signal(SIGPIPE, SIG_IGN);
   auto bin = binary();
   if (!bin || dir_.empty()) return false;
-  std::vector<std::string> args{*bin, "--port", "0", "--unixsocket", socket(),
-                                "--unixsocketperm", "700", "--dir", dir_, "--save", "",
-                                "--appendonly", "yes", "--appendfsync", "everysec",
-                                "--daemonize", "no", "--logfile", dir_ + "/redis.log"};
+  std::vector<std::string> args{*bin,
+                                "--port",
+                                "0",
+                                "--unixsocket",
+                                socket(),
+                                "--unixsocketperm",
+                                "700",
+                                "--dir",
+                                dir_,
+                                "--save",
+                                "",
+                                "--appendonly",
+                                "yes",
+                                "--appendfsync",
+                                "everysec",
+                                "--daemonize",
+                                "no",
+                                "--logfile",
+                                dir_ + "/redis.log"};
   args.insert(args.end(), extra_.begin(), extra_.end());
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());

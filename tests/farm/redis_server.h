@@ -43,13 +43,13 @@ class RedisServer {
 };
 
 // In a test's SetUp: skip when redis-server is missing, or fail when RAYFARM_REQUIRE_REDIS=1.
-#define RAYFARM_REQUIRE_REDIS_SERVER()                                                     \
-  do {                                                                                     \
-    if (!::rayfarm::farm::test::RedisServer::binary()) {                                   \
-      if (::rayfarm::farm::test::redis_required())                                         \
-        FAIL() << "redis-server is not on PATH and RAYFARM_REQUIRE_REDIS=1";               \
+#define RAYFARM_REQUIRE_REDIS_SERVER()                                                       \
+  do {                                                                                       \
+    if (!::rayfarm::farm::test::RedisServer::binary()) {                                     \
+      if (::rayfarm::farm::test::redis_required())                                           \
+        FAIL() << "redis-server is not on PATH and RAYFARM_REQUIRE_REDIS=1";                 \
       GTEST_SKIP() << "redis-server is not on PATH (apt-get install redis-server); skipped"; \
-    }                                                                                      \
+    }                                                                                        \
   } while (0)
 
 bool redis_required();
