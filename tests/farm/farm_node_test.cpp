@@ -1,0 +1,153 @@
+// Farm nodes rendering one job together: the image byte-identical to a local render, also when
+// a node dies holding units, and a cancel sent through any connection stopping every node.
+#include <chrono>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include "farm_fixture.h"
+#include "farm_node.h"
+#include "rayfarm/image_io.h"
+#include "rayfarm/load.h"
+#include "rayfarm/sha256.h"
+
+namespace rayfarm::farm::test {
+namespace {
+
+using namespace std::chrono_literals;
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class FarmNodes : public FarmTest {
+ protected:
+  std::unique_ptr<FarmNode> start_node(const std::string& name, int workers = 1) {
+    NodeConfig c;
+    c.connect = server_->options();
+    c.farm = config(name, 2);
+    c.workers = workers;
+    c.heartbeat = 100ms;
+    c.lease = 500ms;
+    c.cancel_poll = 50ms;
+    auto n = std::make_unique<FarmNode>(c);
+    n->start();
+    return n;
+  }
+
+  FarmSubmission submission(const std::string& job, const std::string& file, int w, int h,
+                            int spp, double unit_work) {
+    FarmSubmission s;
+    s.job = job;
+    s.client = "alice";
+    s.scene_text = read_text(std::string(RAYFARM_SOURCE_DIR) + "/" + file);
+    s.options.width = w;
+    s.options.height = h;
+    s.options.spp = spp;
+    s.result_key = "png-" + job;
+    s.unit_work = unit_work;
+    return s;
+  }
+
+  std::string local_png(const FarmSubmission& s) {
+    LoadedScene loaded = load_scene(s.scene_text);
+    EXPECT_TRUE(loaded.scene);
+    if (!loaded.scene) return {};
+    const Image image = render_image(*loaded.scene, s.options, 2);
+    const auto png = encode_png(image);
+    return std::string(png.begin(), png.end());
+  }
+
+  // Waits for the job to end; returns its final state.
+  std::string wait_final(const std::string& job, std::chrono::milliseconds limit = 60s) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < end) {
+      const std::string state = hget("job:" + job, "state");
+      if (state == "done" || state == "failed" || state == "canceled") return state;
+      std::this_thread::sleep_for(20ms);
+    }
+    return "timeout";
+  }
+};
+
+TEST_F(FarmNodes, TwoNodesRenderAJobByteIdenticalToALocalRender) {
+  auto client = node("client");
+  const FarmSubmission s = submission("j1", "scenes/lab.txt", 200, 150, 2, 5e4);
+  auto r = submit_job(*client.farm, s);
+  ASSERT_TRUE(r) << r.error().message;
+  ASSERT_EQ(r->status, SubmitStatus::Accepted);
+  EXPECT_GT(std::stoi(hget("job:j1", "units")), 4);
+  auto a = start_node("a"), b = start_node("b");
+  ASSERT_EQ(wait_final("j1"), "done") << hget("job:j1", "error");
+  auto png = job_png(*client.farm, s.result_key);
+  ASSERT_TRUE(png && *png);
+  EXPECT_EQ(**png, local_png(s)) << "the farm's PNG is not the local render's";
+  EXPECT_GT(a->counters().units_rendered.load(), 0u);
+  EXPECT_GT(b->counters().units_rendered.load(), 0u);
+  EXPECT_EQ(a->counters().jobs_assembled + b->counters().jobs_assembled, 1u);
+  EXPECT_EQ(stream_length(), 0);
+  EXPECT_EQ(pending(), 0);
+  EXPECT_EQ(integer({"EXISTS", prefix_ + "tiles:j1"}), 0) << "tiles are dropped once assembled";
+}
+
+TEST_F(FarmNodes, ANodeThatDiesHoldingAUnitLosesNothing) {
+  auto client = node("client");
+  // A tile a unit (spp 8, 9 bounces): 48 units, each long enough to be caught holding one.
+  const FarmSubmission s = submission("j2", "scenes/lab.txt", 256, 192, 8, 1024 * 8 * 9.0);
+  ASSERT_TRUE(submit_job(*client.farm, s));
+  auto victim = start_node("victim");
+  const auto end = std::chrono::steady_clock::now() + 20s;
+  while (victim->in_flight() == 0 && std::chrono::steady_clock::now() < end)
+    std::this_thread::sleep_for(1ms);
+  ASSERT_GT(victim->in_flight(), 0u);
+  victim->abandon();  // as kill -9: no release, no ack, no more heartbeats
+  auto a = start_node("a"), b = start_node("b");
+  ASSERT_EQ(wait_final("j2"), "done") << hget("job:j2", "error");
+  EXPECT_GE(a->counters().units_reclaimed + b->counters().units_reclaimed, 1u);
+  auto png = job_png(*client.farm, s.result_key);
+  ASSERT_TRUE(png && *png);
+  EXPECT_EQ(**png, local_png(s));
+  EXPECT_EQ(pending(), 0);
+}
+
+TEST_F(FarmNodes, ACancelFromAnyConnectionStopsEveryNodeAtOnce) {
+  auto client = node("client");
+  const FarmSubmission s = submission("j3", "scenes/lab.txt", 400, 300, 64, 1024 * 64 * 9.0 * 4);
+  ASSERT_TRUE(submit_job(*client.farm, s));
+  auto a = start_node("a"), b = start_node("b");
+  const auto end = std::chrono::steady_clock::now() + 20s;
+  while ((a->in_flight() == 0 || b->in_flight() == 0) && std::chrono::steady_clock::now() < end)
+    std::this_thread::sleep_for(1ms);
+  ASSERT_GT(a->in_flight() + b->in_flight(), 1u);
+  auto other = node("other");
+  auto c = other->cancel("j3", "alice");
+  ASSERT_TRUE(c);
+  EXPECT_EQ(c->status, CancelStatus::Canceled);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (a->in_flight() + b->in_flight() > 0 && std::chrono::steady_clock::now() - t0 < 5s)
+    std::this_thread::sleep_for(1ms);
+  const auto stopped_after = std::chrono::steady_clock::now() - t0;
+  EXPECT_EQ(a->in_flight() + b->in_flight(), 0u);
+  EXPECT_LT(stopped_after, 500ms) << "running units stop within a fraction of a second";
+  EXPECT_EQ(hget("job:j3", "state"), "canceled");
+  EXPECT_EQ(integer({"EXISTS", prefix_ + "tiles:j3"}), 0);
+}
+
+TEST_F(FarmNodes, AJobWhoseSceneIsGoneFailsAfterThreeTriesWithTheReason) {
+  auto client = node("client");
+  FarmSubmission s = submission("j4", "scenes/cho.txt", 64, 48, 1, 1e9);
+  ASSERT_TRUE(submit_job(*client.farm, s));
+  ASSERT_EQ(integer({"DEL", prefix_ + "scene:" + sha256_hex(s.scene_text)}), 1);
+  auto a = start_node("a");
+  ASSERT_EQ(wait_final("j4"), "failed");
+  EXPECT_NE(hget("job:j4", "error").find("no longer kept"), std::string::npos)
+      << hget("job:j4", "error");
+  EXPECT_EQ(a->counters().units_failed.load(), 3u);
+}
+
+}  // namespace
+}  // namespace rayfarm::farm::test
