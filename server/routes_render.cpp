@@ -1,8 +1,6 @@
 // POST /render: a scene from the body, a multipart 'scene' part (its textures in the other
 // parts) or ?sample=NAME, queued, and with ?wait=1 answered with the result once the job ends.
-#include <chrono>
 #include <fstream>
-#include <mutex>
 #include <set>
 
 #include "http_util.h"
@@ -19,23 +17,18 @@ const std::set<std::string> kControlParams = {"wait", "sample"};
 
 // ?wait=1: holds the request until the job ends and answers with its result or error. False
 // when it has not answered (no waiting slot free, or shutting down).
-bool answer_when_final(Service& svc, const Request& req, Response& res, Job& job) {
-  if (!svc.acquire_waiter()) {
+bool answer_when_final(Service& svc, const Request& req, Response& res, const JobRecord& submitted) {
+  auto slot = svc.take_slot(Slot::Kind::waiting);
+  if (!slot) {
     res.set_header("X-Wait", "unavailable");
     return false;
   }
-  struct Release {
-    Service& s;
-    ~Release() { s.release_waiter(); }
-  } release{svc};
-  std::unique_lock lock(job.mu);
-  while (!is_final(job.state) && !svc.stopped())
-    job.changed.wait_for(lock, std::chrono::milliseconds(500));
-  JobState state = job.state;
-  std::string code = job.error_code, message = job.error;
-  lock.unlock();
+  auto job = svc.await_final(*slot, submitted.id);
+  if (!job) return false;  // expired meanwhile: the 202 says where it was
+  const JobState state = job->state;
+  const std::string code = job->error_code, message = job->error;
   if (state == JobState::done) {
-    if (!send_result(svc, req, res, job))
+    if (!send_result(svc, req, res, *job))
       send_error(res, 410, "expired", "the result has already expired");
     return true;
   }
@@ -111,17 +104,13 @@ void post_render(Service& svc, const Request& req, Response& res) {
                            "the file with --data-binary @FILE)";
     return send_error(res, sub.error);
   }
-  auto& job = *sub.job;
+  const JobRecord& submitted = *sub.job;
 
-  if (param_true(req, "wait") && answer_when_final(svc, req, res, job)) return;
-  JobState state;
-  {
-    std::lock_guard lock(job.mu);  // a worker may be starting it
-    state = job.state;
-  }
+  if (param_true(req, "wait") && answer_when_final(svc, req, res, submitted)) return;
+  const JobRecord job = svc.find(submitted.id).value_or(submitted);  // a worker may have started it
   Json body = {{"id", job.id},
-               {"state", to_string(state)},
-               {"queue_position", svc.queue_position(job)},
+               {"state", to_string(job.state)},
+               {"queue_position", svc.queue_position(job.id)},
                {"links",
                 {{"self", "/jobs/" + job.id},
                  {"image", "/jobs/" + job.id + "/image"},

@@ -1247,6 +1247,31 @@ TEST(ServerCompare, SceneAndImageRendersTheReference) {
   EXPECT_EQ(json_of(off)["identical"], false);
 }
 
+// The reference render is waited for on the HTTP thread: it needs a waiting slot like
+// ?wait=1, or many /compare requests could hold every HTTP thread.
+TEST(ServerCompare, ASceneToRenderNeedsAWaitingSlot) {
+  Settings s = test_settings();
+  s.max_waiting_requests = 0;
+  TestServer server(s);
+  auto c = server.client();
+  std::string mine = local_render(kScene, {{"spp", "1"}});
+  auto r = c->Post("/compare", httplib::MultipartFormDataItems{
+                                   {"scene", kScene, "scene.txt", "text/plain"},
+                                   {"image", mine, "mine.png", "image/png"}});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 503) << r->body;
+  EXPECT_EQ(error_of(r)["code"], "busy");
+  EXPECT_EQ(r->get_header_value("Retry-After"), "2");
+  // Nothing was rendered for it.
+  EXPECT_TRUE(json_of(c->Get("/jobs"))["jobs"].empty());
+  // Two images need no render and no slot.
+  auto two = c->Post("/compare", httplib::MultipartFormDataItems{
+                                     {"a", mine, "a.png", "image/png"},
+                                     {"b", mine, "b.png", "image/png"}});
+  ASSERT_TRUE(two);
+  EXPECT_EQ(two->status, 200) << two->body;
+}
+
 TEST(ServerCompare, DifferentSizesAre422) {
   TestServer server;
   auto c = server.client();
