@@ -28,21 +28,6 @@ std::optional<JobState> job_state_from(std::string_view s) {
   return std::nullopt;
 }
 
-std::string_view to_string(Priority p) {
-  switch (p) {
-    case Priority::interactive: return "interactive";
-    case Priority::normal: return "normal";
-    case Priority::batch: return "batch";
-  }
-  return "normal";
-}
-
-std::optional<Priority> priority_from(std::string_view s) {
-  for (Priority p : {Priority::interactive, Priority::normal, Priority::batch})
-    if (to_string(p) == s) return p;
-  return std::nullopt;
-}
-
 long long now_ms() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(
              std::chrono::system_clock::now().time_since_epoch())
@@ -61,7 +46,6 @@ nlohmann::json to_json(const JobRecord& r) {
                         {"path", d.where.path}});
   nlohmann::json record = {{"id", r.id},
                            {"client", r.client},
-                           {"priority", to_string(r.priority)},
                            {"state", to_string(r.state)},
                            {"options", options},
                            {"cache_key", r.cache_key},
@@ -120,7 +104,6 @@ std::optional<JobRecord> record_from_json(const nlohmann::json& j) {
     r.id = j.value("id", "");
     if (r.id.size() != 32) return std::nullopt;
     r.client = j.value("client", "");
-    r.priority = priority_from(j.value("priority", "normal")).value_or(Priority::normal);
     r.state = job_state_from(j.value("state", "")).value_or(JobState::failed);
     // Every option prints as text it reads back; the profile's defaults come back explicit.
     if (j.contains("options") && j["options"].is_object())
@@ -240,7 +223,7 @@ nlohmann::json job_status(const JobRecord& job, int queue_position) {
   nlohmann::json j;
   j["id"] = job.id;
   j["state"] = to_string(job.state);
-  j["priority"] = to_string(job.priority);
+  j["priority"] = to_string(job.options.priority);
   const double progress = rendered_fraction(job);
   j["progress"] = progress;
   j["queue_position"] = queue_position;

@@ -24,20 +24,13 @@ inline bool is_final(JobState s) {
   return s == JobState::done || s == JobState::failed || s == JobState::canceled;
 }
 
-// Queue classes, served strictly in this order (docs/http-api.md#priorities).
-enum class Priority { interactive, normal, batch };
-inline constexpr int kPriorities = 3;
-std::string_view to_string(Priority p);
-std::optional<Priority> priority_from(std::string_view s);
-
 long long now_ms();  // wall clock, milliseconds since the epoch
 
 struct JobRecord {
   // Fixed at submission.
   std::string id;      // 128 random bits, hex
   std::string client;  // roster name ("name:alice"), token digest or socket address
-  Priority priority = Priority::normal;
-  RenderOptions options;
+  RenderOptions options;  // with its queue class, options.priority
   std::string cache_key;  // content address of (scene, options); empty: not cacheable
   int width = 0;
   int height = 0;

@@ -56,7 +56,7 @@ void Service::restore() {
     auto run = std::make_shared<Job>();
     run->id = r.id;
     run->client = r.client;
-    run->priority = r.priority;
+    run->priority = r.options.priority;
     run->scene = std::move(scene);
     run->options = r.options;
     scheduler_->submit(std::move(run));

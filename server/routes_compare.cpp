@@ -27,9 +27,9 @@ bool truthy(const std::string& v) { return v == "1" || v == "true" || v == "yes"
 
 std::optional<Image> render_and_wait(Service& svc, const Slot& slot, const std::string& scene,
                                      const Params& params, const std::string& client,
-                                     const TextureFiles& textures, ApiError& error,
-                                     std::string* job_id) {
-  Submitted sub = svc.submit(scene, params, client, textures);
+                                     const TextureFiles& textures, const SubmitHow& how,
+                                     ApiError& error, std::string* job_id) {
+  Submitted sub = svc.submit(scene, params, client, textures, how);
   if (sub.error) {
     error = sub.error;
     return std::nullopt;
@@ -131,8 +131,10 @@ void post_compare(Service& svc, const Request& req, Response& res) {
       return send_error(res, e);
     }
     ApiError render_error;
+    SubmitHow how;
+    how.default_priority = Priority::interactive;  // someone waits for it
     a = render_and_wait(svc, *slot, req.get_file_value("scene").content, render_params,
-                        client_of(req), textures, render_error, &job_id);
+                        client_of(req), textures, how, render_error, &job_id);
     if (!a) return send_error(res, render_error);
   } else {
     return send_error(res, 400, "bad_request",

@@ -107,7 +107,7 @@ class ServerBackend final : public Backend {
       if (k != "format") params.emplace_back(k, v);
     ApiError e;
     auto image =
-        render_and_wait(svc_, slot_, scene.text, params, client_, scene.textures, e, nullptr);
+        render_and_wait(svc_, slot_, scene.text, params, client_, scene.textures, {}, e, nullptr);
     if (!image) *error = e.message;
     return image;
   }

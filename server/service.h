@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <utility>
@@ -35,9 +36,20 @@ namespace rayfarm::server {
 
 using Params = std::vector<std::pair<std::string, std::string>>;
 
+// How a job is asked for, beyond its scene and options.
+struct SubmitHow {
+  // The queue class when neither the request's options nor the scene's render block name one
+  // (interactive for a client that waits for the answer).
+  Priority default_priority = Priority::normal;
+  // Idempotency-Key (checked by the route; empty: none): the same key from the same client
+  // gives the job it already made (`replayed`), and another request with it is refused.
+  std::string idempotency_key;
+};
+
 struct Submitted {
   std::optional<JobRecord> job;
   ApiError error;
+  bool replayed = false;  // the job an earlier request with the same Idempotency-Key made
 };
 
 // The backends a Service runs on; make_local_backends() gives today's single process.
@@ -91,7 +103,7 @@ class Service {
   // when it can, and otherwise queues the job; the job is on disk before this returns.
   // `textures`: the files the scene names, by the path it writes (docs/http-api.md#textures).
   Submitted submit(const std::string& scene_text, const Params& options, const std::string& client,
-                   const TextureFiles& textures = {});
+                   const TextureFiles& textures = {}, const SubmitHow& how = {});
 
   std::optional<JobRecord> find(const std::string& id) const { return jobs_->get(id); }
   std::vector<JobRecord> jobs_of(const std::string& client, size_t limit) const {
@@ -137,6 +149,9 @@ class Service {
   void expire();
 
  private:
+  Submitted submit_new(const std::string& scene_text, const Params& options,
+                       const std::string& client, const TextureFiles& textures,
+                       const SubmitHow& how, const std::string& digest);
   ApiError check_limits(const Scene& scene, const RenderOptions& options, int width, int height);
   // textures.cpp
   ApiError check_uploads(const TextureFiles& files) const;
@@ -169,6 +184,8 @@ class Service {
   std::unordered_map<std::string, int> image_refs_;
   // How many unfinished jobs need each texture file in the results directory (by its hash).
   std::unordered_map<std::string, int> texture_refs_;
+  // (client, Idempotency-Key) of submissions under way: a second one at once is a 409.
+  std::set<std::pair<std::string, std::string>> keys_in_flight_;
 
   std::vector<Sample> samples_;
   std::atomic<int> streams_{0};

@@ -1,5 +1,6 @@
 // Accepting a job: the per-client and queue limits, the scene and its options checked, the
 // render limits, the content-addressed cache, and the job on disk before it is queued.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -39,13 +40,69 @@ std::string random_id() {
 }
 
 
+namespace {
+
+// What identifies a request for its Idempotency-Key: the scene, the options as given and the
+// textures' bytes (not how the answer is awaited).
+std::string request_digest(const std::string& scene_text, const Params& params,
+                           const TextureFiles& textures) {
+  std::string all = sha256_hex(scene_text);
+  Params sorted = params;
+  std::sort(sorted.begin(), sorted.end());
+  for (const auto& [k, v] : sorted) all += "\n" + sha256_hex(k) + "=" + sha256_hex(v);
+  for (const auto& [path, bytes] : textures) all += "\n" + sha256_hex(path) + ":" + sha256_hex(bytes);
+  return sha256_hex(all);
+}
+
+}  // namespace
+
 Submitted Service::submit(const std::string& scene_text, const Params& params,
-                          const std::string& client, const TextureFiles& textures) {
+                          const std::string& client, const TextureFiles& textures,
+                          const SubmitHow& how) {
   if (shutting_down_) {
     ApiError e = api_error(503, "shutting_down", "the server is shutting down; try again shortly");
     e.retry_after = 5;
     return {std::nullopt, e};
   }
+  if (how.idempotency_key.empty()) return submit_new(scene_text, params, client, textures, how, "");
+  // draft-ietf-httpapi-idempotency-key-header: the same key and request give the first
+  // answer's job; the key with another request is 422; a retry while the first is still
+  // being accepted is 409.
+  const std::string digest = request_digest(scene_text, params, textures);
+  const auto key = std::make_pair(client, how.idempotency_key);
+  {
+    std::lock_guard lock(mu_);
+    if (!keys_in_flight_.insert(key).second) {
+      ApiError e = api_error(409, "idempotency_key_in_use",
+                             "a request with this Idempotency-Key is still being accepted; "
+                             "retry in a moment");
+      e.retry_after = 1;
+      return {std::nullopt, e};
+    }
+  }
+  struct Done {
+    Service& s;
+    const std::pair<std::string, std::string>& key;
+    ~Done() {
+      std::lock_guard lock(s.mu_);
+      s.keys_in_flight_.erase(key);
+    }
+  } done{*this, key};
+  if (auto earlier = jobs_->find_by_key(client, how.idempotency_key)) {
+    if (earlier->request_digest != digest)
+      return {std::nullopt,
+              api_error(422, "idempotency_key_reused",
+                        "this Idempotency-Key was used for another request (job " + earlier->id +
+                            "): the scene, options or textures differ; use a new key for a new "
+                            "request")};
+    return {earlier, {}, true};
+  }
+  return submit_new(scene_text, params, client, textures, how, digest);
+}
+
+Submitted Service::submit_new(const std::string& scene_text, const Params& params,
+                              const std::string& client, const TextureFiles& textures,
+                              const SubmitHow& how, const std::string& digest) {
   if (queue_->depth() + queue_->active() >=
       static_cast<size_t>(settings_.queue_capacity)) {
     metrics_.rejected("queue_full");
@@ -89,6 +146,11 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   apply_options(options, scene->render, diags);
   OptionSet query;
   for (auto& [k, v] : params) query.push_back({k, v, {0, 0, k}});
+  const auto names_priority = [](const OptionSet& set) {
+    return std::any_of(set.begin(), set.end(), [](auto& o) { return o.name == "priority"; });
+  };
+  if (!names_priority(query) && !names_priority(scene->render))
+    options.priority = how.default_priority;
   apply_options(options, query, diags);
   if (!diags.has_errors())
     if (std::string conflict = profile_conflict(options); !conflict.empty())
@@ -121,6 +183,8 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   job.client = client;
   job.created_ms = now_ms();
   job.options = options;
+  job.idempotency_key = how.idempotency_key;
+  job.request_digest = digest;
   {
     Diagnostics lints;
     lint_scene(*scene, options, lints);
@@ -168,7 +232,7 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     auto run = std::make_shared<Job>();
     run->id = job.id;
     run->client = job.client;
-    run->priority = job.priority;
+    run->priority = job.options.priority;
     run->scene = scene;
     run->options = options;
     scheduler_->submit(std::move(run));

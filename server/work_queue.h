@@ -14,6 +14,8 @@
 
 namespace rayfarm::server {
 
+inline constexpr int kPriorities = 3;  // the classes of Priority, served in its order
+
 struct QueueItem {
   std::string id;
   std::string client;

@@ -86,14 +86,14 @@ class ServerContract : public ::testing::TestWithParam<BackendUnderTest> {
 
 TEST_P(ServerContract, CreatedJobsAreFoundWithAVersionAndTheirFields) {
   JobRecord r = record("addr:a");
-  r.priority = Priority::batch;
+  r.options.priority = Priority::batch;
   r.warnings.push_back({Severity::warning, "eye-inside", "the eye is inside 'ball'", {3, 4, "x"}});
   JobRecord made = jobs().create(r, "scene text");
   EXPECT_GE(made.version, 1u);
   auto got = jobs().get(r.id);
   ASSERT_TRUE(got);
   EXPECT_EQ(got->client, "addr:a");
-  EXPECT_EQ(got->priority, Priority::batch);
+  EXPECT_EQ(got->options.priority, Priority::batch);
   EXPECT_EQ(got->state, JobState::queued);
   EXPECT_EQ(got->version, made.version);
   ASSERT_EQ(got->warnings.size(), 1u);
