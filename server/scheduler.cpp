@@ -85,7 +85,9 @@ std::optional<Scheduler::Pick> Scheduler::pick() {
   if (!paused_)
     while (auto item = queue_.claim(node_, max_active_per_client_)) {
       auto it = queued_.find(item->id);
-      if (it == queued_.end()) {  // not this process's job: nothing to run
+      if (it == queued_.end()) {
+        // Not a job this process accepted: the local queue holds none. A queue shared by
+        // several processes needs the job built here from its record and scene instead.
         queue_.complete(item->id);
         continue;
       }

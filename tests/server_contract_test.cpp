@@ -30,6 +30,8 @@ struct BackendUnderTest {
   std::function<Backends(const fs::path& place)> make;
 };
 
+void PrintTo(const BackendUnderTest& b, std::ostream* os) { *os << b.name; }
+
 std::vector<BackendUnderTest> backends_under_test() {
   return {
       {"Local", true, [](const fs::path& place) { return make_local_backends(place); }},
