@@ -118,7 +118,8 @@ void HttpApi::harden() {
     if (req.get_header_value("Origin") != origin) return;
     res.set_header("Access-Control-Allow-Origin", origin);
     res.set_header("Access-Control-Expose-Headers",
-                   "Location, Retry-After, ETag, X-Job-Id, X-Job-State, X-Render-Ms, X-Cache");
+                   "Location, Retry-After, ETag, X-Job-Id, X-Job-State, X-Render-Ms, X-Cache, "
+                   "Idempotent-Replayed");
   });
 
   server_.set_exception_handler([](const Request&, Response& res, std::exception_ptr) {

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <vector>
 
 #include "rayfarm/diagnostic.h"
@@ -36,18 +35,15 @@ void send_image(Response& res, const Image& image, bool ppm) {
                   ppm ? "image/x-portable-pixmap" : "image/png");
 }
 
-bool send_result(Service& service, const Request& req, Response& res, const Job& job) {
+bool send_result(Service& service, const Request& req, Response& res, const JobRecord& job) {
   auto png = service.result_png(job);
   if (!png) return false;
   std::string etag = "\"" + job.image_name + (wants_ppm(req, job) ? "-ppm" : "") + "\"";
   res.set_header("ETag", etag);
   res.set_header("Cache-Control", "private, max-age=86400");
   res.set_header("X-Job-Id", job.id);
-  {
-    std::lock_guard lock(job.mu);
-    res.set_header("X-Render-Ms", std::to_string(std::llround(job.stats.render_ms)));
-    res.set_header("X-Cache", job.cache_hit ? "hit" : "miss");
-  }
+  res.set_header("X-Render-Ms", std::to_string(std::llround(job.stats.render_ms)));
+  res.set_header("X-Cache", job.cache_hit ? "hit" : "miss");
   if (req.get_header_value("If-None-Match") == etag) {
     res.status = 304;
     return true;
@@ -101,7 +97,7 @@ bool check_query(const Request& req, Response& res, std::string_view route,
   return true;
 }
 
-bool wants_ppm(const Request& req, const Job& job) {
+bool wants_ppm(const Request& req, const JobRecord& job) {
   if (req.has_param("format")) return req.get_param_value("format") == "ppm";
   return job.options.format == ImageFormat::ppm;
 }

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "job.h"
+#include "job_record.h"
 #include "service.h"
 
 namespace rayfarm::server {
@@ -27,7 +27,7 @@ void send_error(httplib::Response& res, int status, const std::string& code,
 void send_image(httplib::Response& res, const Image& image, bool ppm);
 // Sends a finished job's result with its caching headers; false when it has expired.
 bool send_result(Service& service, const httplib::Request& req, httplib::Response& res,
-                 const Job& job);
+                 const JobRecord& job);
 
 // A query parameter a route takes, and the values it takes (none listed: any).
 struct QueryParam {
@@ -41,7 +41,7 @@ bool check_query(const httplib::Request& req, httplib::Response& res, std::strin
                  std::initializer_list<QueryParam> taken);
 
 // ?format=ppm, else the format the job was submitted with.
-bool wants_ppm(const httplib::Request& req, const Job& job);
+bool wants_ppm(const httplib::Request& req, const JobRecord& job);
 // ?NAME=1, true or yes.
 bool param_true(const httplib::Request& req, const char* name);
 

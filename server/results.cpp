@@ -1,107 +1,110 @@
-// A render's outcome: its final state and image stored when it ends, and the image read back
-// (cache, then disk) for the result routes.
+// A render's course in the job's record (running, then its final state) and its image stored
+// when it ends, and the image read back (cache, then blobs) for the result routes.
 #include "rayfarm/image_io.h"
 #include "service.h"
 
 namespace rayfarm::server {
 
+bool Service::on_started(Job& job, const RenderStats& stats) {
+  auto rec = jobs_->transition(job.id, {JobState::queued}, [&](JobRecord& r) {
+    r.state = JobState::running;
+    r.started_ms = now_ms();
+    r.stats = stats;
+    ++r.attempts;
+  });
+  if (rec && rec->cancel_requested) job.cancel_requested = true;
+  return rec && !rec->cancel_requested;
+}
+
 void Service::on_finished(Job& job, RenderJob* render) {
   RenderStats st = render ? render->stats() : RenderStats{};
   JobState state;
   std::string code, message;
-  std::shared_ptr<const std::string> png;
   {
     std::lock_guard jl(job.mu);
-    if (!render) {
-      state = job.error.empty() ? JobState::canceled : JobState::failed;
-      code = job.error_code;
-      message = job.error;
-    } else if (job.timed_out) {
-      state = JobState::failed;
-      code = "timeout";
-      message = "the job ran longer than the server's limit of " +
-                format_number(settings_.job_timeout) +
-                " s: lower spp, max_depth or the image size, or give time_limit to stop "
-                "sampling in time";
-    } else if (!job.error.empty()) {
-      state = JobState::failed;
-      code = job.error_code;
-      message = job.error;
-    } else if (st.stop_reason == "canceled") {
-      // Stopped by its client, or interrupted by a shutdown (a cancel that came after the
-      // last tile does not discard a complete image).
-      state = job.cancel_requested ? JobState::canceled : JobState::queued;
-    } else {
-      state = JobState::done;
-    }
+    code = job.error_code;
+    message = job.error;
+  }
+  const auto before = jobs_->get(job.id);
+  const bool canceled = job.cancel_requested || (before && before->cancel_requested);
+  if (!render) {
+    state = message.empty() ? JobState::canceled : JobState::failed;
+  } else if (job.timed_out) {
+    state = JobState::failed;
+    code = "timeout";
+    message = "the job ran longer than the server's limit of " +
+              format_number(settings_.job_timeout) +
+              " s: lower spp, max_depth or the image size, or give time_limit to stop "
+              "sampling in time";
+  } else if (!message.empty()) {
+    state = JobState::failed;
+  } else if (st.stop_reason == "canceled") {
+    // Stopped by its client, or interrupted by a shutdown (a cancel that came after the
+    // last tile does not discard a complete image).
+    state = canceled ? JobState::canceled : JobState::queued;
+  } else {
+    state = JobState::done;
   }
   if (state == JobState::queued) {
     // Interrupted by a shutdown: it stays queued on disk and runs again after a restart.
-    std::lock_guard jl(job.mu);
-    job.state = JobState::queued;
-    job.attempts = std::max(0, job.attempts - 1);
-    job.stats = st;
-  } else {
-    if (state == JobState::done) {
-      try {
-        auto bytes = encode_png(render->image());
-        png = std::make_shared<const std::string>(bytes.begin(), bytes.end());
-        store_.save_image(job.image_name, *png);
-        cache_.put(job.image_name, png);
-      } catch (const std::exception& ex) {
-        state = JobState::failed;
-        code = "storage_error";
-        message = std::string("could not store the result: ") + ex.what();
-      }
-    }
-    std::lock_guard jl(job.mu);
-    job.state = state;
-    job.error_code = code;
-    job.error = message;
-    job.finished_ms = now_ms();
-    job.stats = render ? st : job.stats;
-    job.render.reset();
-    // Only a render needs the scene, and a final job never runs again: a busy day keeps
-    // thousands of finished jobs, so they keep only their record.
-    job.scene.reset();
-    ++job.version;
+    jobs_->transition(job.id, {JobState::running}, [&](JobRecord& r) {
+      r.state = JobState::queued;
+      r.attempts = std::max(0, r.attempts - 1);
+      r.stats = st;
+    });
+    return;
   }
-  job.changed.notify_all();
-  persist(job);
-  // After the final record is on disk: a crash in between leaves files the next start sweeps,
+  if (state == JobState::done) {
+    try {
+      auto bytes = encode_png(render->image());
+      auto png = std::make_shared<const std::string>(bytes.begin(), bytes.end());
+      std::string name = before ? before->image_name : job.id;
+      blobs_.put(BlobKind::image, name, *png);
+      cache_.put(name, png);
+    } catch (const std::exception& ex) {
+      state = JobState::failed;
+      code = "storage_error";
+      message = std::string("could not store the result: ") + ex.what();
+    }
+  }
+  std::vector<std::string> textures;
+  auto after = jobs_->transition(job.id, {JobState::queued, JobState::running}, [&](JobRecord& r) {
+    r.state = state;
+    r.error_code = code;
+    r.error = message;
+    r.finished_ms = now_ms();
+    if (render) r.stats = st;
+    if (!render && !message.empty()) ++r.attempts;  // the scene could not be prepared
+    r.textures.clear();
+  });
+  // Only a render needs the scene, and a final job never runs again.
+  job.scene.reset();
+  // After the final record is stored: a crash in between leaves files the next start sweeps,
   // never a queued record whose textures are gone.
-  if (state != JobState::queued) release_textures(job);
-  if (state != JobState::queued)
-    metrics_.render_finished(std::string(to_string(state)), st.render_ms / 1000, st.primary_rays,
-                             st.shadow_rays, st.reflection_rays);
+  if (before && after) release_textures(before->textures);
+  metrics_.render_finished(std::string(to_string(state)), st.render_ms / 1000, st.primary_rays,
+                           st.shadow_rays, st.reflection_rays);
 }
 
-std::shared_ptr<const std::string> Service::result_png(const Job& job) {
+std::shared_ptr<const std::string> Service::result_png(const JobRecord& job) {
   if (auto hit = cache_.get(job.image_name)) return hit;
-  if (auto disk = store_.load_image(job.image_name)) {
-    auto png = std::make_shared<const std::string>(std::move(*disk));
+  if (auto stored = blobs_.get(BlobKind::image, job.image_name)) {
+    auto png = std::make_shared<const std::string>(std::move(*stored));
     cache_.put(job.image_name, png);
     return png;
   }
   return nullptr;
 }
 
-std::optional<Image> Service::current_image(const Job& job) {
-  std::shared_ptr<RenderJob> render;
-  JobState state;
-  {
-    std::lock_guard jl(job.mu);
-    render = job.render;
-    state = job.state;
-  }
-  if (render) return render->image();
-  if (state == JobState::done) {
+std::optional<Image> Service::current_image(const JobRecord& job) {
+  if (auto render = scheduler_->render_of(job.id)) return render->image();
+  if (job.state == JobState::done) {
     auto png = result_png(job);
     if (!png) return std::nullopt;
     std::string error;
     return decode_image(*png, &error);
   }
-  return Image(job.width, job.height);  // not started: black
+  return Image(job.width, job.height);  // not started, or ended without an image: black
 }
 
 }  // namespace rayfarm::server

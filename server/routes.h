@@ -27,9 +27,10 @@ void get_jobs(Service& svc, const httplib::Request& req, httplib::Response& res)
 
 // routes_compare.cpp
 void post_compare(Service& svc, const httplib::Request& req, httplib::Response& res);
-// Submits a render and waits for its image (the caller holds a waiting slot).
-std::optional<Image> render_and_wait(Service& svc, const std::string& scene, const Params& params,
-                                     const std::string& client, const TextureFiles& textures,
+// Submits a render and waits for its image, holding the caller's waiting slot.
+std::optional<Image> render_and_wait(Service& svc, const Slot& slot, const std::string& scene,
+                                     const Params& params, const std::string& client,
+                                     const TextureFiles& textures, const SubmitHow& how,
                                      ApiError& error, std::string* job_id);
 // The query parameters, and the multipart fields (parts without a file name) named in `names`.
 std::map<std::string, std::string> request_fields(const httplib::Request& req,

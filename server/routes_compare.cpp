@@ -1,9 +1,7 @@
 // POST /compare: two uploaded images, or a scene (with its textures) rendered here against an
 // uploaded image, compared pixel by pixel; the numbers as JSON or, with diff=1, the difference
 // image. Its options come from the query or from form fields, and unknown ones are refused.
-#include <chrono>
 #include <cmath>
-#include <mutex>
 #include <optional>
 #include <set>
 
@@ -27,28 +25,25 @@ bool truthy(const std::string& v) { return v == "1" || v == "true" || v == "yes"
 
 }  // namespace
 
-std::optional<Image> render_and_wait(Service& svc, const std::string& scene, const Params& params,
-                                     const std::string& client, const TextureFiles& textures,
+std::optional<Image> render_and_wait(Service& svc, const Slot& slot, const std::string& scene,
+                                     const Params& params, const std::string& client,
+                                     const TextureFiles& textures, const SubmitHow& how,
                                      ApiError& error, std::string* job_id) {
-  Submitted sub = svc.submit(scene, params, client, textures);
+  Submitted sub = svc.submit(scene, params, client, textures, how);
   if (sub.error) {
     error = sub.error;
     return std::nullopt;
   }
-  Job& job = *sub.job;
-  if (job_id) *job_id = job.id;
-  std::unique_lock lock(job.mu);
-  while (!is_final(job.state) && !svc.stopped())
-    job.changed.wait_for(lock, std::chrono::milliseconds(500));
-  const bool done = job.state == JobState::done;
-  const std::string message = job.error;
-  lock.unlock();
+  if (job_id) *job_id = sub.job->id;
+  auto job = svc.await_final(slot, sub.job->id);
+  const bool done = job && job->state == JobState::done;
+  const std::string message = job ? job->error : "";
   if (!done) {
     error = api_error(500, "render_failed",
                       "the reference render did not finish" + (message.empty() ? "" : ": " + message));
     return std::nullopt;
   }
-  std::optional<Image> image = svc.current_image(job);
+  std::optional<Image> image = svc.current_image(*job);
   if (!image) error = api_error(410, "expired", "the reference image expired");
   return image;
 }
@@ -129,15 +124,17 @@ void post_compare(Service& svc, const Request& req, Response& res) {
     for (const auto& [name, part] : req.files)
       if (part.filename.empty() && known.count(name)) textures.erase(name);
     // The render is waited for here: it takes one of the waiting slots, as ?wait=1 does.
-    if (!svc.acquire_waiter()) {
+    auto slot = svc.take_slot(Slot::Kind::waiting);
+    if (!slot) {
       ApiError e = api_error(503, "busy", "too many requests are waiting for renders; try again");
       e.retry_after = 2;
       return send_error(res, e);
     }
     ApiError render_error;
-    a = render_and_wait(svc, req.get_file_value("scene").content, render_params, client_of(req),
-                        textures, render_error, &job_id);
-    svc.release_waiter();
+    SubmitHow how;
+    how.default_priority = Priority::interactive;  // someone waits for it
+    a = render_and_wait(svc, *slot, req.get_file_value("scene").content, render_params,
+                        client_of(req), textures, how, render_error, &job_id);
     if (!a) return send_error(res, render_error);
   } else {
     return send_error(res, 400, "bad_request",

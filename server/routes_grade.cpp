@@ -85,8 +85,8 @@ class SceneTextures final : public ResourceResolver {
 
 class ServerBackend final : public Backend {
  public:
-  ServerBackend(Service& svc, const Request& req, const Files& scenes)
-      : svc_(svc), req_(req), scenes_(scenes), client_(client_of(req)) {}
+  ServerBackend(Service& svc, const Slot& slot, const Request& req, const Files& scenes)
+      : svc_(svc), slot_(slot), req_(req), scenes_(scenes), client_(client_of(req)) {}
 
   std::optional<SceneFiles> scene(const std::string& path, std::string* error) override {
     std::string why;
@@ -106,7 +106,8 @@ class ServerBackend final : public Backend {
     for (auto& [k, v] : option_pairs(options))
       if (k != "format") params.emplace_back(k, v);
     ApiError e;
-    auto image = render_and_wait(svc_, scene.text, params, client_, scene.textures, e, nullptr);
+    auto image =
+        render_and_wait(svc_, slot_, scene.text, params, client_, scene.textures, {}, e, nullptr);
     if (!image) *error = e.message;
     return image;
   }
@@ -126,6 +127,7 @@ class ServerBackend final : public Backend {
 
  private:
   Service& svc_;
+  const Slot& slot_;
   const Request& req_;
   const Files& scenes_;
   std::string client_;
@@ -223,16 +225,13 @@ void post_grade(Service& svc, const Request& req, Response& res) {
                       "the assignment has " + std::to_string(assignment->tests.size()) +
                           " tests; at most " + std::to_string(kMaxTests) + " are graded at once");
   // Grading waits for its references: one waiting slot for the whole request.
-  if (!svc.acquire_waiter()) {
+  auto slot = svc.take_slot(Slot::Kind::waiting);
+  if (!slot) {
     ApiError e = api_error(503, "busy", "too many requests are waiting for renders; try again");
     e.retry_after = 2;
     return send_error(res, e);
   }
-  struct Release {
-    Service& s;
-    ~Release() { s.release_waiter(); }
-  } release{svc};
-  ServerBackend backend(svc, req, *files);
+  ServerBackend backend(svc, *slot, req, *files);
   GradeSettings settings;
   settings.base.profile = svc.settings().default_profile;
   settings.hints = !(fields.count("hints") && fields.at("hints") == "0");

@@ -3,7 +3,6 @@
 #include <chrono>
 #include <cstdint>
 #include <memory>
-#include <mutex>
 #include <thread>
 
 #include "http_util.h"
@@ -18,26 +17,22 @@ using Json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 
 struct StreamState {
-  std::uint64_t sent_version = ~0ULL;
+  explicit StreamState(Slot s) : slot(std::move(s)) {}
+  Slot slot;  // held while the stream is open
+  std::string id;
+  std::uint64_t sent_version = 0;  // none sent yet: a record's version is at least 1
   Clock::time_point last_sent{};
 };
 
 // One event (or a keep-alive comment) of GET /jobs/ID/events; false ends the stream.
-bool send_next_event(Service& svc, const std::shared_ptr<Job>& job, StreamState& state,
-                     httplib::DataSink& sink) {
+bool send_next_event(Service& svc, StreamState& state, httplib::DataSink& sink) {
   // At most ten events a second, at least four while the job changes.
   std::this_thread::sleep_until(state.last_sent + std::chrono::milliseconds(100));
-  std::uint64_t version;
-  JobState js;
-  {
-    std::unique_lock lock(job->mu);
-    job->changed.wait_for(lock, std::chrono::milliseconds(250), [&] {
-      return job->version != state.sent_version || is_final(job->state);
-    });
-    version = job->version;
-    js = job->state;
-  }
-  if (!sink.is_writable()) return false;
+  auto job = svc.await(state.slot, state.id, state.sent_version,
+                       Clock::now() + std::chrono::milliseconds(250));
+  if (!job || !sink.is_writable()) return false;  // expired meanwhile, or the client left
+  const std::uint64_t version = job->version;
+  const JobState js = job->state;
   if (svc.stopped() && !is_final(js)) {
     std::string msg = "event: shutdown\ndata: {}\n\n";
     sink.write(msg.data(), msg.size());
@@ -71,14 +66,17 @@ void get_job(Service& svc, const Request& req, Response& res) {
 
 void delete_job(Service& svc, const Request& req, Response& res) {
   if (!check_query(req, res, "DELETE /jobs/ID", {})) return;
-  ApiError e = svc.cancel(req.matches[1], client_of(req));
+  const std::string id = req.matches[1];
+  ApiError e = svc.cancel(id, client_of(req));
   if (e) return send_error(res, e);
-  auto job = svc.find(req.matches[1]);
-  {
-    // A running job stops within a tile: answer with its state after the cancel, not before.
-    std::unique_lock lock(job->mu);
-    job->changed.wait_for(lock, std::chrono::seconds(2), [&] { return is_final(job->state); });
-  }
+  auto job = svc.find(id);
+  // A running job stops within a tile: answer with its state after the cancel, not before
+  // (when a waiting slot is free; else at once, with the state as it is).
+  const auto deadline = Clock::now() + std::chrono::seconds(2);
+  if (auto slot = svc.take_slot(Slot::Kind::waiting))
+    while (job && !is_final(job->state) && Clock::now() < deadline && !svc.stopped())
+      job = svc.await(*slot, id, job->version, deadline);
+  if (!job) return send_error(res, 404, "not_found", "no job " + id);
   send_json(res, 200, svc.status(*job));
 }
 
@@ -89,11 +87,7 @@ void get_job_image(Service& svc, const Request& req, Response& res) {
     return;
   auto job = svc.find(req.matches[1]);
   if (!job) return send_error(res, 404, "not_found", "no job " + req.matches[1].str());
-  JobState state;
-  {
-    std::lock_guard lock(job->mu);
-    state = job->state;
-  }
+  const JobState state = job->state;
   if (param_true(req, "partial") && state != JobState::done) {
     auto image = svc.current_image(*job);
     if (!image) return send_error(res, 410, "expired", "the result has expired");
@@ -118,7 +112,8 @@ void get_job_image(Service& svc, const Request& req, Response& res) {
 void get_job_events(Service& svc, const Request& req, Response& res) {
   auto job = svc.find(req.matches[1]);
   if (!job) return send_error(res, 404, "not_found", "no job " + req.matches[1].str());
-  if (!svc.acquire_stream()) {
+  auto slot = svc.take_slot(Slot::Kind::stream);
+  if (!slot) {
     ApiError e;
     e.status = 503;
     e.code = "too_many_streams";
@@ -126,26 +121,29 @@ void get_job_events(Service& svc, const Request& req, Response& res) {
     e.retry_after = 2;
     return send_error(res, e);
   }
-  auto state = std::make_shared<StreamState>();
+  auto state = std::make_shared<StreamState>(std::move(*slot));
+  state->id = job->id;
   res.set_header("Cache-Control", "no-cache");
   res.set_header("X-Accel-Buffering", "no");
   res.set_chunked_content_provider(
       "text/event-stream",
-      [&svc, job, state](size_t, httplib::DataSink& sink) {
+      [&svc, state](size_t, httplib::DataSink& sink) {
         // cpp-httplib calls providers outside its exception handling: nothing may escape.
         try {
-          return send_next_event(svc, job, *state, sink);
+          return send_next_event(svc, *state, sink);
         } catch (const std::exception&) {
           return false;
         }
       },
-      [&svc](bool) { svc.release_stream(); });
+      // The stream's slot goes with the last copy of its state (cpp-httplib drops the
+      // provider when the response ends).
+      [state](bool) mutable { state.reset(); });
 }
 
 void get_jobs(Service& svc, const Request& req, Response& res) {
   if (!check_query(req, res, "GET /jobs", {})) return;
   Json list = Json::array();
-  for (auto& job : svc.jobs_of(client_of(req), 100)) list.push_back(svc.status(*job));
+  for (const JobRecord& job : svc.jobs_of(client_of(req), 100)) list.push_back(svc.status(job));
   send_json(res, 200, {{"jobs", list}});
 }
 

@@ -1,8 +1,7 @@
 // POST /render: a scene from the body, a multipart 'scene' part (its textures in the other
 // parts) or ?sample=NAME, queued, and with ?wait=1 answered with the result once the job ends.
-#include <chrono>
+#include <algorithm>
 #include <fstream>
-#include <mutex>
 #include <set>
 
 #include "http_util.h"
@@ -17,25 +16,34 @@ using Json = nlohmann::json;
 
 const std::set<std::string> kControlParams = {"wait", "sample"};
 
+// An Idempotency-Key as Stripe takes them: 1 to 255 visible ASCII characters (a UUID is the
+// usual choice).
+ApiError check_idempotency_key(const Request& req, std::string& key) {
+  if (!req.has_header("Idempotency-Key")) return {};
+  if (req.get_header_value_count("Idempotency-Key") > 1)
+    return api_error(400, "invalid_idempotency_key", "Idempotency-Key is given more than once");
+  key = req.get_header_value("Idempotency-Key");
+  const bool visible = std::all_of(key.begin(), key.end(), [](char c) { return c > 0x20 && c < 0x7f; });
+  if (key.empty() || key.size() > 255 || !visible)
+    return api_error(400, "invalid_idempotency_key",
+                     "Idempotency-Key must be 1 to 255 visible ASCII characters (a UUID, say)");
+  return {};
+}
+
 // ?wait=1: holds the request until the job ends and answers with its result or error. False
 // when it has not answered (no waiting slot free, or shutting down).
-bool answer_when_final(Service& svc, const Request& req, Response& res, Job& job) {
-  if (!svc.acquire_waiter()) {
+bool answer_when_final(Service& svc, const Request& req, Response& res, const JobRecord& submitted) {
+  auto slot = svc.take_slot(Slot::Kind::waiting);
+  if (!slot) {
     res.set_header("X-Wait", "unavailable");
     return false;
   }
-  struct Release {
-    Service& s;
-    ~Release() { s.release_waiter(); }
-  } release{svc};
-  std::unique_lock lock(job.mu);
-  while (!is_final(job.state) && !svc.stopped())
-    job.changed.wait_for(lock, std::chrono::milliseconds(500));
-  JobState state = job.state;
-  std::string code = job.error_code, message = job.error;
-  lock.unlock();
+  auto job = svc.await_final(*slot, submitted.id);
+  if (!job) return false;  // expired meanwhile: the 202 says where it was
+  const JobState state = job->state;
+  const std::string code = job->error_code, message = job->error;
   if (state == JobState::done) {
-    if (!send_result(svc, req, res, job))
+    if (!send_result(svc, req, res, *job))
       send_error(res, 410, "expired", "the result has already expired");
     return true;
   }
@@ -89,6 +97,10 @@ void post_render(Service& svc, const Request& req, Response& res) {
   } else {
     text = req.body;
   }
+  SubmitHow how;
+  if (ApiError e = check_idempotency_key(req, how.idempotency_key)) return send_error(res, e);
+  // A client that waits for the answer is someone looking at the screen.
+  if (param_true(req, "wait")) how.default_priority = Priority::interactive;
   if (text.find_first_not_of(" \t\r\n") == std::string::npos)
     return send_error(res, 400, "empty_scene",
                       "the request has no scene: send a model file or a JSON scene as the body");
@@ -102,7 +114,7 @@ void post_render(Service& svc, const Request& req, Response& res) {
     }
     if (!kControlParams.count(k)) params.emplace_back(k, v);
   }
-  Submitted sub = svc.submit(text, params, client_of(req), textures);
+  Submitted sub = svc.submit(text, params, client_of(req), textures, how);
   if (sub.error) {
     // `curl -d @scene.txt` strips the newlines: the first comment then swallows the file.
     if (req.has_header(kFormEncodedMark) && sub.error.status == 400 &&
@@ -111,17 +123,14 @@ void post_render(Service& svc, const Request& req, Response& res) {
                            "the file with --data-binary @FILE)";
     return send_error(res, sub.error);
   }
-  auto& job = *sub.job;
+  const JobRecord& submitted = *sub.job;
+  if (sub.replayed) res.set_header("Idempotent-Replayed", "true");
 
-  if (param_true(req, "wait") && answer_when_final(svc, req, res, job)) return;
-  JobState state;
-  {
-    std::lock_guard lock(job.mu);  // a worker may be starting it
-    state = job.state;
-  }
+  if (param_true(req, "wait") && answer_when_final(svc, req, res, submitted)) return;
+  const JobRecord job = svc.find(submitted.id).value_or(submitted);  // a worker may have started it
   Json body = {{"id", job.id},
-               {"state", to_string(state)},
-               {"queue_position", svc.queue_position(job)},
+               {"state", to_string(job.state)},
+               {"queue_position", svc.queue_position(job.id)},
                {"links",
                 {{"self", "/jobs/" + job.id},
                  {"image", "/jobs/" + job.id + "/image"},

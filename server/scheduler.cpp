@@ -1,12 +1,15 @@
-// Fair tile scheduling over jobs and clients.
+// Starting jobs in the queue's order, and fair tile scheduling over the started ones.
 #include "scheduler.h"
 
 #include <algorithm>
 
 namespace rayfarm::server {
 
-Scheduler::Scheduler(int workers, int max_active_per_client, double job_timeout_s, Hooks hooks)
-    : max_active_per_client_(std::max(1, max_active_per_client)),
+Scheduler::Scheduler(WorkQueue& queue, std::string node, int workers, int max_active_per_client,
+                     double job_timeout_s, Hooks hooks)
+    : queue_(queue),
+      node_(std::move(node)),
+      max_active_per_client_(std::max(1, max_active_per_client)),
       job_timeout_s_(job_timeout_s),
       hooks_(std::move(hooks)) {
   for (int i = 0; i < std::max(1, workers); ++i) threads_.emplace_back([this] { work(); });
@@ -17,13 +20,9 @@ Scheduler::~Scheduler() { stop(); }
 void Scheduler::submit(std::shared_ptr<Job> job) {
   {
     std::lock_guard lock(mu_);
-    auto it = std::find_if(clients_.begin(), clients_.end(),
-                           [&](const Client& c) { return c.name == job->client; });
-    if (it == clients_.end()) {
-      clients_.push_back({job->client, {}, 0});
-      it = clients_.end() - 1;
-    }
-    it->entries.push_back({std::move(job)});
+    QueueItem item{job->id, job->client, job->priority};
+    queued_[job->id] = std::move(job);
+    queue_.enqueue(item);
   }
   cv_.notify_all();
 }
@@ -35,93 +34,85 @@ Scheduler::Entry* Scheduler::find(const Job& job) {
   return nullptr;
 }
 
-bool Scheduler::cancel(const std::shared_ptr<Job>& job) {
+bool Scheduler::cancel(const std::string& id) {
+  std::shared_ptr<Job> removed;
   std::shared_ptr<RenderJob> render;
-  bool removed = false;
   {
     std::lock_guard lock(mu_);
-    Entry* e = find(*job);
-    if (!e) return false;
-    job->cancel_requested = true;
-    if (e->active) {
-      // Running, or being prepared (then prepare() sees cancel_requested).
-      std::lock_guard jl(job->mu);
-      render = job->render;
+    if (auto it = queued_.find(id); it != queued_.end() && queue_.remove(id)) {
+      removed = it->second;
+      removed->cancel_requested = true;
+      queued_.erase(it);
     } else {
+      Entry* e = nullptr;
       for (Client& c : clients_)
-        std::erase_if(c.entries, [&](const Entry& x) { return x.job == job; });
-      std::erase_if(clients_, [](const Client& c) { return c.entries.empty(); });
-      removed = true;
+        for (Entry& x : c.entries)
+          if (x.job->id == id) e = &x;
+      if (!e) return false;
+      // Running, or being prepared (then prepare() sees cancel_requested).
+      e->job->cancel_requested = true;
+      std::lock_guard jl(e->job->mu);
+      render = e->job->render;
     }
   }
-  if (removed) hooks_.finished(*job, nullptr);
+  if (removed) hooks_.finished(*removed, nullptr);
   else if (render) render->cancel();
   cv_.notify_all();
   return true;
 }
 
-int Scheduler::queue_position(const Job& job) const {
-  std::lock_guard lock(mu_);
-  int ahead = 0;
-  bool found = false;
-  for (const Client& c : clients_)
-    for (const Entry& e : c.entries) {
-      if (e.job.get() == &job) found = !e.active;
-      else if (!e.active && e.job->sequence < job.sequence) ++ahead;
-    }
-  return found ? ahead + 1 : 0;
-}
-
-size_t Scheduler::waiting() const {
-  std::lock_guard lock(mu_);
-  size_t n = 0;
-  for (const Client& c : clients_)
-    for (const Entry& e : c.entries) n += !e.active;
-  return n;
-}
-
-size_t Scheduler::jobs_of(const std::string& client) const {
+std::shared_ptr<RenderJob> Scheduler::render_of(const std::string& id) const {
   std::lock_guard lock(mu_);
   for (const Client& c : clients_)
-    if (c.name == client) return c.entries.size();
-  return 0;
+    for (const Entry& e : c.entries)
+      if (e.job->id == id) {
+        std::lock_guard jl(e.job->mu);
+        return e.job->render;
+      }
+  return nullptr;
 }
 
 size_t Scheduler::active() const {
   std::lock_guard lock(mu_);
   size_t n = 0;
-  for (const Client& c : clients_)
-    for (const Entry& e : c.entries) n += e.active;
+  for (const Client& c : clients_) n += c.entries.size();
   return n;
 }
 
-// Under mu_: the next job to give a tile, round-robin over clients then over the client's
-// jobs. Jobs of a client start in submission order, a few at a time.
+// Under mu_: a job to start when the queue has one this node may take, else the next job to
+// give a tile, round-robin over clients then over the client's jobs.
 std::optional<Scheduler::Pick> Scheduler::pick() {
+  if (!paused_)
+    while (auto item = queue_.claim(node_, max_active_per_client_)) {
+      auto it = queued_.find(item->id);
+      if (it == queued_.end()) {
+        // Not a job this process accepted: the local queue holds none. A queue shared by
+        // several processes needs the job built here from its record and scene instead.
+        queue_.complete(item->id);
+        continue;
+      }
+      std::shared_ptr<Job> job = std::move(it->second);
+      queued_.erase(it);
+      auto c = std::find_if(clients_.begin(), clients_.end(),
+                            [&](const Client& x) { return x.name == job->client; });
+      if (c == clients_.end()) {
+        clients_.push_back({job->client, {}, 0});
+        c = clients_.end() - 1;
+      }
+      c->entries.push_back({job, true});
+      return Pick{job, true, tile_epoch_};
+    }
   const size_t n = clients_.size();
   for (size_t ci = 0; ci < n; ++ci) {
     Client& c = clients_[(next_client_ + ci) % n];
-    int active = 0;
-    for (const Entry& e : c.entries) active += e.active;
     const size_t m = c.entries.size();
     for (size_t ei = 0; ei < m; ++ei) {
       size_t index = (c.next + ei) % m;
       Entry& e = c.entries[index];
-      bool runnable = e.active && !e.preparing && e.blocked_epoch != tile_epoch_;
-      bool startable = !e.active && !paused_ && active < max_active_per_client_;
-      // Queued jobs of a client start in order: only the first waiting one may start.
-      if (!e.active && !startable) continue;
-      if (!runnable && !startable) continue;
-      if (startable) {
-        bool earlier_waiting = false;
-        for (size_t k = 0; k < index; ++k) earlier_waiting |= !c.entries[k].active;
-        if (earlier_waiting) continue;
-        e.active = true;
-        e.preparing = true;
-      }
+      if (e.preparing || e.blocked_epoch == tile_epoch_) continue;
       next_client_ = (next_client_ + ci + 1) % n;
       c.next = index + 1;
-      return Pick{e.job, startable, tile_epoch_};
+      return Pick{e.job, false, tile_epoch_};
     }
   }
   return std::nullopt;
@@ -135,29 +126,23 @@ void Scheduler::prepare(const std::shared_ptr<Job>& job) {
   } catch (const std::exception& e) {
     error = std::string("could not prepare the scene: ") + e.what();
   }
-  {
-    std::lock_guard jl(job->mu);
-    if (render) {
-      job->render = render;
-      job->state = JobState::running;
-      job->started_ms = now_ms();
-      job->run_start = std::chrono::steady_clock::now();
-      job->stats = render->stats();
-    } else {
+  if (!render) {
+    {
+      std::lock_guard jl(job->mu);
       job->error = error;
       job->error_code = "bad_request";
     }
-    ++job->attempts;
-    ++job->version;
-  }
-  job->changed.notify_all();
-  if (!render) {
     remove_and_finish(job, nullptr);
     return;
   }
+  {
+    std::lock_guard jl(job->mu);
+    job->render = render;
+    job->run_start = std::chrono::steady_clock::now();
+  }
   // A cancel or a shutdown that came while the scene was being prepared.
-  if (job->cancel_requested || interrupt_.load()) render->cancel();
-  if (hooks_.started) hooks_.started(*job);
+  if (!hooks_.started(*job, render->stats()) || job->cancel_requested || interrupt_.load())
+    render->cancel();
   std::lock_guard lock(mu_);
   if (Entry* e = find(*job)) e->preparing = false;
 }
@@ -170,26 +155,23 @@ void Scheduler::remove_and_finish(const std::shared_ptr<Job>& job, RenderJob* re
       present |= std::erase_if(c.entries, [&](const Entry& x) { return x.job == job; }) > 0;
     std::erase_if(clients_, [](const Client& c) { return c.entries.empty(); });
     if (!present) return;  // another worker finished it
+    queue_.complete(job->id);
   }
   hooks_.finished(*job, render);
+  {
+    std::lock_guard jl(job->mu);
+    job->render.reset();
+  }
   cv_.notify_all();
 }
 
 void Scheduler::after_tile(const std::shared_ptr<Job>& job, RenderJob& render) {
-  {
-    std::lock_guard jl(job->mu);
-    // Another worker may have finished the job meanwhile: its final stats stand.
-    if (is_final(job->state)) return;
-    job->stats = render.stats();
-    ++job->version;
-    if (job_timeout_s_ > 0 && std::chrono::steady_clock::now() - job->run_start >
-                                  std::chrono::duration<double>(job_timeout_s_)) {
-      job->timed_out = true;
-      render.cancel();
-    }
+  if (job_timeout_s_ > 0 && std::chrono::steady_clock::now() - job->run_start >
+                                std::chrono::duration<double>(job_timeout_s_)) {
+    job->timed_out = true;
+    render.cancel();
   }
-  job->changed.notify_all();
-  if (hooks_.progress) hooks_.progress(*job);
+  if (hooks_.progress) hooks_.progress(*job, render.stats());
 }
 
 void Scheduler::work() {
@@ -260,11 +242,10 @@ void Scheduler::drain(std::chrono::milliseconds grace) {
   {
     std::lock_guard lock(mu_);
     for (Client& c : clients_)
-      for (Entry& e : c.entries)
-        if (e.active) {
-          std::lock_guard jl(e.job->mu);
-          if (e.job->render) running.push_back(e.job->render);
-        }
+      for (Entry& e : c.entries) {
+        std::lock_guard jl(e.job->mu);
+        if (e.job->render) running.push_back(e.job->render);
+      }
   }
   for (auto& r : running) r->cancel();
   while (active() > 0 && std::chrono::steady_clock::now() < deadline + std::chrono::seconds(5))

@@ -1,6 +1,7 @@
-// The render pool: worker threads that take tiles from jobs, round-robin over clients and,
-// within a client, over its active jobs. A job alone gets every worker; a small job behind
-// a big one gets its share at once. Renders never run on HTTP threads.
+// The render pool: worker threads that start jobs in the WorkQueue's fair order and take tiles
+// from the started ones, round-robin over clients and, within a client, over its active jobs.
+// A job alone gets every worker; a small job behind a big one gets its share at once. Renders
+// never run on HTTP threads.
 #pragma once
 
 #include <atomic>
@@ -10,33 +11,36 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <unordered_map>
 #include <vector>
 
 #include "job.h"
+#include "work_queue.h"
 
 namespace rayfarm::server {
 
 class Scheduler {
  public:
   struct Hooks {
-    std::function<void(Job&)> started;  // state is running, attempts counted
-    std::function<void(Job&)> progress;
-    // Exactly once per job: the render ended (`render` null when canceled while queued).
+    // The render is prepared: the job's record becomes running. False when the job may not
+    // run any more (canceled meanwhile): the render stops.
+    std::function<bool(Job&, const RenderStats&)> started;
+    std::function<void(Job&, const RenderStats&)> progress;
+    // Exactly once per job: the render ended (`render` null when canceled while queued, or
+    // when the scene could not be prepared: then the job's error is set).
     std::function<void(Job&, RenderJob* render)> finished;
   };
 
-  Scheduler(int workers, int max_active_per_client, double job_timeout_s, Hooks hooks);
+  Scheduler(WorkQueue& queue, std::string node, int workers, int max_active_per_client,
+            double job_timeout_s, Hooks hooks);
   ~Scheduler();
 
   void submit(std::shared_ptr<Job> job);
   // Cancels a queued job at once or asks a running one to stop. False if not in the pool.
-  bool cancel(const std::shared_ptr<Job>& job);
-  // 1-based place among jobs not yet started, 0 when started or unknown.
-  int queue_position(const Job& job) const;
-  size_t waiting() const;
+  bool cancel(const std::string& id);
+  // The render in progress of a job this process runs (null otherwise).
+  std::shared_ptr<RenderJob> render_of(const std::string& id) const;
   size_t active() const;
-  // Jobs of this client queued or running (what the per-client limit counts).
-  size_t jobs_of(const std::string& client) const;
   int workers() const { return static_cast<int>(threads_.size()); }
 
   // Shutdown: no queued job starts any more; returns when running renders ended or the
@@ -47,7 +51,6 @@ class Scheduler {
  private:
   struct Entry {
     std::shared_ptr<Job> job;
-    bool active = false;     // started (render exists or is being prepared)
     bool preparing = false;
     std::uint64_t blocked_epoch = ~0ULL;  // its pass waits for tiles in flight
   };
@@ -69,13 +72,16 @@ class Scheduler {
   Entry* find(const Job& job);
   void after_tile(const std::shared_ptr<Job>& job, RenderJob& render);
 
+  WorkQueue& queue_;
+  const std::string node_;
   const int max_active_per_client_;
   const double job_timeout_s_;
   Hooks hooks_;
 
   mutable std::mutex mu_;
   std::condition_variable cv_;
-  std::vector<Client> clients_;
+  std::vector<Client> clients_;  // the started jobs
+  std::unordered_map<std::string, std::shared_ptr<Job>> queued_;  // in queue_, by id
   size_t next_client_ = 0;
   std::uint64_t tile_epoch_ = 0;
   bool paused_ = false;

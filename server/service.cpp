@@ -1,5 +1,5 @@
-// The service's own state: construction (and the expiry thread), the job table, cancelling,
-// the counted slots of long requests, health, metrics and shutdown.
+// The service's own state: construction (and the expiry thread), cancelling, waiting, the
+// counted slots of long requests, health, metrics and shutdown.
 #include "service.h"
 
 #include <cstdio>
@@ -7,11 +7,28 @@
 
 #include <algorithm>
 
+#include "file_blob_store.h"
+#include "local_job_store.h"
+#include "local_work_queue.h"
+
 namespace rayfarm::server {
 
-Service::Service(Settings settings)
+Backends make_local_backends(const std::filesystem::path& results_dir) {
+  Backends b;
+  b.blobs = std::make_unique<FileBlobStore>(results_dir);
+  b.jobs = std::make_unique<LocalJobStore>(results_dir, *b.blobs);
+  b.queue = std::make_unique<LocalWorkQueue>();
+  return b;
+}
+
+Service::Service(Settings settings) : Service(settings, make_local_backends(settings.results_dir)) {}
+
+Service::Service(Settings settings, Backends backends)
     : settings_(std::move(settings)),
-      store_(settings_.results_dir),
+      backends_(std::move(backends)),
+      blobs_(*backends_.blobs),
+      jobs_(backends_.jobs.get()),
+      queue_(backends_.queue.get()),
       cache_(settings_.cache_bytes) {
   if (!settings_.tokens_file.empty()) {
     std::vector<std::string> errors;
@@ -24,9 +41,12 @@ Service::Service(Settings settings)
   int workers = settings_.workers > 0 ? settings_.workers
                                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   Scheduler::Hooks hooks;
-  hooks.started = [this](Job& job) { persist(job); };
+  hooks.started = [this](Job& job, const RenderStats& st) { return on_started(job, st); };
+  hooks.progress = [this](Job& job, const RenderStats& st) { jobs_->update_progress(job.id, st); };
   hooks.finished = [this](Job& job, RenderJob* render) { on_finished(job, render); };
-  scheduler_ = std::make_unique<Scheduler>(workers, 4, settings_.job_timeout, std::move(hooks));
+  // At most 4 jobs of a client render at once (more would only split its share further).
+  scheduler_ = std::make_unique<Scheduler>(*queue_, "local", workers, 4, settings_.job_timeout,
+                                           std::move(hooks));
   load_samples();
   restore();
   janitor_ = std::thread([this] {
@@ -44,86 +64,68 @@ Service::~Service() {
   scheduler_->stop();
 }
 
-std::shared_ptr<Job> Service::find(const std::string& id) const {
-  std::lock_guard lock(mu_);
-  auto it = jobs_.find(id);
-  return it == jobs_.end() ? nullptr : it->second;
-}
-
-std::vector<std::shared_ptr<Job>> Service::jobs_of(const std::string& client, size_t limit) const {
-  std::vector<std::shared_ptr<Job>> out;
-  {
-    std::lock_guard lock(mu_);
-    for (auto& [id, j] : jobs_)
-      if (j->client == client) out.push_back(j);
-  }
-  std::sort(out.begin(), out.end(), [](auto& a, auto& b) { return a->sequence > b->sequence; });
-  if (out.size() > limit) out.resize(limit);
-  return out;
-}
-
 ApiError Service::cancel(const std::string& id, const std::string& client) {
-  auto job = find(id);
+  auto job = jobs_->get(id);
   if (!job) return api_error(404, "not_found", "no job " + id);
   if (job->client != client)
     return api_error(403, "forbidden", "only the client that submitted a job can cancel it");
-  {
-    std::lock_guard jl(job->mu);
-    if (is_final(job->state)) {
-      if (job->state == JobState::canceled) return {};
-      return api_error(409, "already_finished",
-                       "the job has already " +
-                           std::string(job->state == JobState::done ? "finished" : "failed"));
-    }
+  auto now = jobs_->request_cancel(id);
+  if (now && is_final(now->state)) {
+    if (now->state == JobState::canceled) return {};
+    return api_error(409, "already_finished",
+                     "the job has already " +
+                         std::string(now->state == JobState::done ? "finished" : "failed"));
   }
-  scheduler_->cancel(job);
+  scheduler_->cancel(id);
   return {};
 }
 
-void Service::persist(const Job& job) {
-  try {
-    store_.save_record(job);
-  } catch (const std::exception&) {
-    // The job goes on; after a restart it runs again, which is safe.
+std::optional<Slot> Service::take_slot(Slot::Kind kind) {
+  std::atomic<int>& count = kind == Slot::Kind::waiting ? waiters_ : streams_;
+  const int cap =
+      kind == Slot::Kind::waiting ? settings_.max_waiting_requests : settings_.max_event_streams;
+  if (count.fetch_add(1) >= cap) {
+    count.fetch_sub(1);
+    return std::nullopt;
+  }
+  return Slot(&count);
+}
+
+std::optional<JobRecord> Service::await(const Slot&, const std::string& id,
+                                        std::uint64_t since_version,
+                                        std::chrono::steady_clock::time_point deadline) {
+  // In short steps, so a shutdown is noticed without a wake-up from the store.
+  for (;;) {
+    auto step = std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(250));
+    auto job = jobs_->watch(id, since_version, step);
+    if (!job || job->version > since_version || is_final(job->state) || stopped() ||
+        std::chrono::steady_clock::now() >= deadline)
+      return job;
   }
 }
 
-bool Service::acquire_stream() {
-  if (streams_.fetch_add(1) >= settings_.max_event_streams) {
-    streams_.fetch_sub(1);
-    return false;
+std::optional<JobRecord> Service::await_final(const Slot& slot, const std::string& id) {
+  std::uint64_t seen = 0;
+  for (;;) {
+    auto job = await(slot, id, seen, std::chrono::steady_clock::time_point::max());
+    if (!job || is_final(job->state) || stopped()) return job;
+    seen = job->version;
   }
-  return true;
 }
-void Service::release_stream() { streams_.fetch_sub(1); }
-bool Service::acquire_waiter() {
-  if (waiters_.fetch_add(1) >= settings_.max_waiting_requests) {
-    waiters_.fetch_sub(1);
-    return false;
-  }
-  return true;
-}
-void Service::release_waiter() { waiters_.fetch_sub(1); }
 
 nlohmann::json Service::health() const {
   return {{"status", shutting_down_ ? "shutting_down" : "ok"},
-          {"queue_depth", scheduler_->waiting()},
-          {"running", scheduler_->active()},
+          {"queue_depth", queue_->depth()},
+          {"running", queue_->active()},
           {"queue_capacity", settings_.queue_capacity},
           {"workers", scheduler_->workers()}};
 }
 
 std::string Service::metrics_text() const {
   Metrics::Gauges g;
-  {
-    std::lock_guard lock(mu_);
-    for (auto& [id, j] : jobs_) {
-      std::lock_guard jl(j->mu);
-      ++g.jobs_by_state[std::string(to_string(j->state))];
-    }
-  }
-  g.queue_depth = static_cast<long>(scheduler_->waiting());
-  g.running = static_cast<long>(scheduler_->active());
+  for (auto& [state, n] : jobs_->count_by_state()) g.jobs_by_state[std::string(to_string(state))] = n;
+  g.queue_depth = static_cast<long>(queue_->depth());
+  g.running = static_cast<long>(queue_->active());
   g.workers = scheduler_->workers();
   g.event_streams = streams_.load();
   g.waiting_requests = waiters_.load();
@@ -135,17 +137,7 @@ void Service::shutdown() {
   if (shutting_down_.exchange(true)) return;
   scheduler_->drain(std::chrono::milliseconds(static_cast<long>(settings_.shutdown_grace * 1000)));
   scheduler_->stop();
-  stopped_ = true;
-  std::vector<std::shared_ptr<Job>> jobs;
-  {
-    std::lock_guard lock(mu_);
-    for (auto& [id, j] : jobs_) jobs.push_back(j);
-  }
-  // Waiting requests and event streams wake up and see stopped().
-  for (auto& j : jobs) {
-    { std::lock_guard jl(j->mu); }
-    j->changed.notify_all();
-  }
+  stopped_ = true;  // waiting requests and event streams see it within their next step
 }
 
 }  // namespace rayfarm::server

@@ -1,7 +1,8 @@
-// The render service without HTTP: accepting jobs (checked, limited, durable), the job
-// table, results and their cache, expiry, samples, health and metrics. The HTTP layer
-// (http_api.cpp, routes_*.cpp) only translates requests to these calls. Its parts:
-// submission.cpp, results.cpp, samples.cpp, recovery.cpp (restart), expiry.cpp.
+// The render service without HTTP: accepting jobs (checked, limited, durable), waiting for
+// them, results and their cache, expiry, samples, health and metrics, over a JobStore, a
+// WorkQueue and a BlobStore. The HTTP layer (http_api.cpp, routes_*.cpp) only translates
+// requests to these calls and sees jobs as JobRecords. Its parts: submission.cpp,
+// results.cpp, samples.cpp, recovery.cpp (restart), expiry.cpp.
 #pragma once
 
 #include <atomic>
@@ -11,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <utility>
@@ -19,22 +21,64 @@
 #include <nlohmann/json.hpp>
 
 #include "api_error.h"
+#include "blob_store.h"
 #include "image_cache.h"
 #include "job.h"
+#include "job_store.h"
 #include "metrics.h"
 #include "roster.h"
 #include "scheduler.h"
 #include "settings.h"
-#include "store.h"
 #include "textures.h"
+#include "work_queue.h"
 
 namespace rayfarm::server {
 
 using Params = std::vector<std::pair<std::string, std::string>>;
 
+// How a job is asked for, beyond its scene and options.
+struct SubmitHow {
+  // The queue class when neither the request's options nor the scene's render block name one
+  // (interactive for a client that waits for the answer).
+  Priority default_priority = Priority::normal;
+  // Idempotency-Key (checked by the route; empty: none): the same key from the same client
+  // gives the job it already made (`replayed`), and another request with it is refused.
+  std::string idempotency_key;
+};
+
 struct Submitted {
-  std::shared_ptr<Job> job;
+  std::optional<JobRecord> job;
   ApiError error;
+  bool replayed = false;  // the job an earlier request with the same Idempotency-Key made
+};
+
+// The backends a Service runs on; make_local_backends() gives today's single process.
+struct Backends {
+  std::unique_ptr<BlobStore> blobs;
+  std::unique_ptr<JobStore> jobs;
+  std::unique_ptr<WorkQueue> queue;
+};
+// Files in `results_dir` (memory only when it is empty), the queue in this process.
+Backends make_local_backends(const std::filesystem::path& results_dir);
+
+class Service;
+
+// A counted place for a request that holds its connection open while it waits: a waiting
+// request (?wait=1, /compare and /grade with a scene) or an event stream. Released when it is
+// destroyed.
+class Slot {
+ public:
+  enum class Kind { waiting, stream };
+  Slot(Slot&& other) noexcept : counter_(std::exchange(other.counter_, nullptr)) {}
+  Slot& operator=(Slot&&) = delete;
+  ~Slot() {
+    if (counter_) counter_->fetch_sub(1);
+  }
+
+ private:
+  friend class Service;
+  explicit Slot(std::atomic<int>* counter) : counter_(counter) {}
+  std::atomic<int>* counter_;
 };
 
 struct Sample {
@@ -47,6 +91,7 @@ struct Sample {
 class Service {
  public:
   explicit Service(Settings settings);
+  Service(Settings settings, Backends backends);
   ~Service();
 
   const Settings& settings() const { return settings_; }
@@ -58,18 +103,33 @@ class Service {
   // when it can, and otherwise queues the job; the job is on disk before this returns.
   // `textures`: the files the scene names, by the path it writes (docs/http-api.md#textures).
   Submitted submit(const std::string& scene_text, const Params& options, const std::string& client,
-                   const TextureFiles& textures = {});
+                   const TextureFiles& textures = {}, const SubmitHow& how = {});
 
-  std::shared_ptr<Job> find(const std::string& id) const;
-  std::vector<std::shared_ptr<Job>> jobs_of(const std::string& client, size_t limit) const;
+  std::optional<JobRecord> find(const std::string& id) const { return jobs_->get(id); }
+  std::vector<JobRecord> jobs_of(const std::string& client, size_t limit) const {
+    return jobs_->list_by_client(client, limit);
+  }
   ApiError cancel(const std::string& id, const std::string& client);
-  int queue_position(const Job& job) const { return scheduler_->queue_position(job); }
-  nlohmann::json status(const Job& job) const { return job_status(job, queue_position(job)); }
+  int queue_position(const std::string& id) const { return queue_->position(id); }
+  nlohmann::json status(const JobRecord& job) const {
+    return job_status(job, queue_position(job.id));
+  }
+
+  // A counted slot of `kind`; nullopt when all are taken.
+  std::optional<Slot> take_slot(Slot::Kind kind);
+  // The one way a request waits for a job, holding a slot: returns the record once its
+  // version is above `since_version` (or it is final), at the deadline, or when rendering has
+  // stopped (shutdown), whichever comes first; nullopt when the job is unknown.
+  std::optional<JobRecord> await(const Slot& slot, const std::string& id,
+                                 std::uint64_t since_version,
+                                 std::chrono::steady_clock::time_point deadline);
+  // await() until the job is final or rendering stops.
+  std::optional<JobRecord> await_final(const Slot& slot, const std::string& id);
 
   // The result PNG of a done job; null when it has expired.
-  std::shared_ptr<const std::string> result_png(const Job& job);
+  std::shared_ptr<const std::string> result_png(const JobRecord& job);
   // The image so far (or the result when done).
-  std::optional<Image> current_image(const Job& job);
+  std::optional<Image> current_image(const JobRecord& job);
 
   const std::vector<Sample>& samples() const { return samples_; }
   const Sample* sample(const std::string& name) const;
@@ -77,12 +137,6 @@ class Service {
   nlohmann::json health() const;
   std::string metrics_text() const;
   Metrics& metrics() { return metrics_; }
-
-  // Counted slots for requests that hold a connection open.
-  bool acquire_stream();
-  void release_stream();
-  bool acquire_waiter();
-  void release_waiter();
 
   bool shutting_down() const { return shutting_down_.load(); }
   // Rendering has stopped (after the shutdown grace period): waiting requests give up.
@@ -95,36 +149,43 @@ class Service {
   void expire();
 
  private:
+  Submitted submit_new(const std::string& scene_text, const Params& options,
+                       const std::string& client, const TextureFiles& textures,
+                       const SubmitHow& how, const std::string& digest);
   ApiError check_limits(const Scene& scene, const RenderOptions& options, int width, int height);
   // textures.cpp
   ApiError check_uploads(const TextureFiles& files) const;
   ApiError resolve_uploads(Scene& scene, const TextureFiles& files) const;
-  void keep_textures(const Job& job, const Scene& scene, const TextureFiles& files);
-  void release_textures(Job& job);
+  void keep_textures(const std::vector<std::string>& hashes, const Scene& scene,
+                     const TextureFiles& files);
+  void release_textures(const std::vector<std::string>& hashes);
   std::shared_ptr<const Scene> reload_scene(const std::string& text,
                                             const std::vector<std::string>& hashes);
   void sweep_textures();
   void restore();
+  bool on_started(Job& job, const RenderStats& stats);
   void on_finished(Job& job, RenderJob* render);
-  void persist(const Job& job);
-  std::shared_ptr<Job> new_job(const std::string& client);
   void load_samples();
+  void release_image(const std::string& name);
 
   Settings settings_;
   Roster roster_;
-  ResultStore store_;
+  Backends backends_;
+  BlobStore& blobs_;
+  JobStore* jobs_;
+  WorkQueue* queue_;
   ImageCache cache_;
   Metrics metrics_;
   std::unique_ptr<Scheduler> scheduler_;
 
   mutable std::mutex mu_;
-  std::map<std::string, std::shared_ptr<Job>> jobs_;
   // How many kept (or being submitted) jobs name each image: expiry deletes an image only when
-  // none does, without scanning the table under its lock.
+  // none does, without scanning the table.
   std::unordered_map<std::string, int> image_refs_;
   // How many unfinished jobs need each texture file in the results directory (by its hash).
   std::unordered_map<std::string, int> texture_refs_;
-  std::uint64_t sequence_ = 0;
+  // (client, Idempotency-Key) of submissions under way: a second one at once is a 409.
+  std::set<std::pair<std::string, std::string>> keys_in_flight_;
 
   std::vector<Sample> samples_;
   std::atomic<int> streams_{0};

@@ -1,5 +1,6 @@
 // Accepting a job: the per-client and queue limits, the scene and its options checked, the
 // render limits, the content-addressed cache, and the job on disk before it is queued.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -39,36 +40,82 @@ std::string random_id() {
 }
 
 
-std::shared_ptr<Job> Service::new_job(const std::string& client) {
-  auto job = std::make_shared<Job>();
-  job->id = random_id();
-  job->client = client;
-  job->created_ms = now_ms();
-  std::lock_guard lock(mu_);
-  job->sequence = ++sequence_;
-  return job;
+namespace {
+
+// What identifies a request for its Idempotency-Key: the scene, the options as given and the
+// textures' bytes (not how the answer is awaited).
+std::string request_digest(const std::string& scene_text, const Params& params,
+                           const TextureFiles& textures) {
+  std::string all = sha256_hex(scene_text);
+  Params sorted = params;
+  std::sort(sorted.begin(), sorted.end());
+  for (const auto& [k, v] : sorted) all += "\n" + sha256_hex(k) + "=" + sha256_hex(v);
+  for (const auto& [path, bytes] : textures) all += "\n" + sha256_hex(path) + ":" + sha256_hex(bytes);
+  return sha256_hex(all);
 }
 
+}  // namespace
+
 Submitted Service::submit(const std::string& scene_text, const Params& params,
-                          const std::string& client, const TextureFiles& textures) {
+                          const std::string& client, const TextureFiles& textures,
+                          const SubmitHow& how) {
   if (shutting_down_) {
     ApiError e = api_error(503, "shutting_down", "the server is shutting down; try again shortly");
     e.retry_after = 5;
-    return {nullptr, e};
+    return {std::nullopt, e};
   }
-  if (scheduler_->waiting() + scheduler_->active() >=
+  if (how.idempotency_key.empty()) return submit_new(scene_text, params, client, textures, how, "");
+  // draft-ietf-httpapi-idempotency-key-header: the same key and request give the first
+  // answer's job; the key with another request is 422; a retry while the first is still
+  // being accepted is 409.
+  const std::string digest = request_digest(scene_text, params, textures);
+  const auto key = std::make_pair(client, how.idempotency_key);
+  {
+    std::lock_guard lock(mu_);
+    if (!keys_in_flight_.insert(key).second) {
+      ApiError e = api_error(409, "idempotency_key_in_use",
+                             "a request with this Idempotency-Key is still being accepted; "
+                             "retry in a moment");
+      e.retry_after = 1;
+      return {std::nullopt, e};
+    }
+  }
+  struct Done {
+    Service& s;
+    const std::pair<std::string, std::string>& key;
+    ~Done() {
+      std::lock_guard lock(s.mu_);
+      s.keys_in_flight_.erase(key);
+    }
+  } done{*this, key};
+  if (auto earlier = jobs_->find_by_key(client, how.idempotency_key)) {
+    if (earlier->request_digest != digest)
+      return {std::nullopt,
+              api_error(422, "idempotency_key_reused",
+                        "this Idempotency-Key was used for another request (job " + earlier->id +
+                            "): the scene, options or textures differ; use a new key for a new "
+                            "request")};
+    return {earlier, {}, true};
+  }
+  return submit_new(scene_text, params, client, textures, how, digest);
+}
+
+Submitted Service::submit_new(const std::string& scene_text, const Params& params,
+                              const std::string& client, const TextureFiles& textures,
+                              const SubmitHow& how, const std::string& digest) {
+  if (queue_->depth() + queue_->active() >=
       static_cast<size_t>(settings_.queue_capacity)) {
     metrics_.rejected("queue_full");
     ApiError e = api_error(429, "queue_full",
                            "the render queue is full (" + std::to_string(settings_.queue_capacity) +
                                " jobs); try again later");
     e.retry_after = 2;
-    return {nullptr, e};
+    return {std::nullopt, e};
   }
   {
     // The pool holds exactly the unfinished jobs: counting there costs the client's own
     // jobs, not every job kept for reading back (thousands on a busy day).
-    const auto mine = static_cast<long long>(scheduler_->jobs_of(client));
+    const auto mine = static_cast<long long>(queue_->jobs_of(client));
     const int named_limit = roster_.max_jobs_of(client);  // a grader may have a larger quota
     if (mine >= (named_limit > 0 ? named_limit : settings_.max_jobs_per_client)) {
       metrics_.rejected("client_limit");
@@ -76,19 +123,19 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
           429, "too_many_jobs",
           "you have " + std::to_string(mine) + " jobs queued or running; wait for some to finish");
       e.retry_after = 2;
-      return {nullptr, e};
+      return {std::nullopt, e};
     }
   }
 
   if (ApiError e = check_uploads(textures)) {
     metrics_.rejected(e.limit);
-    return {nullptr, e};
+    return {std::nullopt, e};
   }
   LoadedScene loaded = load_scene(scene_text);
-  if (!loaded.scene) return {nullptr, scene_error(loaded.diags)};
+  if (!loaded.scene) return {std::nullopt, scene_error(loaded.diags)};
   if (ApiError e = resolve_uploads(*loaded.scene, textures)) {
     if (!e.limit.empty()) metrics_.rejected(e.limit);
-    return {nullptr, e};
+    return {std::nullopt, e};
   }
   auto scene = std::make_shared<const Scene>(std::move(*loaded.scene));
 
@@ -99,6 +146,11 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
   apply_options(options, scene->render, diags);
   OptionSet query;
   for (auto& [k, v] : params) query.push_back({k, v, {0, 0, k}});
+  const auto names_priority = [](const OptionSet& set) {
+    return std::any_of(set.begin(), set.end(), [](auto& o) { return o.name == "priority"; });
+  };
+  if (!names_priority(query) && !names_priority(scene->render))
+    options.priority = how.default_priority;
   apply_options(options, query, diags);
   if (!diags.has_errors())
     if (std::string conflict = profile_conflict(options); !conflict.empty())
@@ -107,7 +159,7 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     const Diagnostic* d = diags.first_error();
     ApiError e = api_error(400, "invalid_option", d->message);
     e.path = d->where.path;
-    return {nullptr, e};
+    return {std::nullopt, e};
   }
   auto camera = scene->find_camera(options.camera);
   if (!camera) {
@@ -116,75 +168,75 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     ApiError e = api_error(400, "invalid_option",
                            "no camera named '" + options.camera.substr(0, 64) + "'; the scene's cameras: " + names);
     e.path = "camera";
-    return {nullptr, e};
+    return {std::nullopt, e};
   }
   const Camera& cam = scene->cameras[*camera];
   int width = options.width > 0 ? options.width : cam.width;
   int height = options.height > 0 ? options.height : cam.height;
   if (ApiError e = check_limits(*scene, options, width, height)) {
     metrics_.rejected(e.limit);
-    return {nullptr, e};
+    return {std::nullopt, e};
   }
 
-  auto job = new_job(client);
-  job->options = options;
+  JobRecord job;
+  job.id = random_id();
+  job.client = client;
+  job.created_ms = now_ms();
+  job.options = options;
+  job.idempotency_key = how.idempotency_key;
+  job.request_digest = digest;
   {
     Diagnostics lints;
     lint_scene(*scene, options, lints);
     for (const Diagnostic& d : loaded.diags.items())
-      if (d.severity == Severity::warning) job->warnings.push_back(d);
-    for (const Diagnostic& d : lints.items()) job->warnings.push_back(d);
+      if (d.severity == Severity::warning) job.warnings.push_back(d);
+    for (const Diagnostic& d : lints.items()) job.warnings.push_back(d);
   }
-  job->width = width;
-  job->height = height;
+  job.width = width;
+  job.height = height;
   // A time limit makes the result depend on the machine's speed: never shared.
   const std::vector<std::string> hashes = texture_hashes(*scene, textures);
-  if (options.time_limit == 0) job->cache_key = content_key(loaded.desc, options, hashes);
-  job->image_name = job->cache_key.empty() ? job->id : job->cache_key;
+  if (options.time_limit == 0) job.cache_key = content_key(loaded.desc, options, hashes);
+  job.image_name = job.cache_key.empty() ? job.id : job.cache_key;
 
   bool hit;
   {
     // The image's reference is taken with the check, so expiry cannot delete an image this
     // job is about to be answered from.
     std::lock_guard lock(mu_);
-    hit = !job->cache_key.empty() &&
-          (cache_.get(job->cache_key) || store_.has_image(job->cache_key));
-    ++image_refs_[job->image_name];
-  }
-  if (!hit) {  // what the render reads; the text and textures are on disk for re-runs
-    job->scene = scene;
-    job->textures = hashes;
+    hit = !job.cache_key.empty() &&
+          (cache_.get(job.cache_key) || blobs_.has(BlobKind::image, job.cache_key));
+    ++image_refs_[job.image_name];
   }
   if (hit) {
-    std::lock_guard jl(job->mu);
-    job->state = JobState::done;
-    job->cache_hit = true;
-    job->started_ms = job->finished_ms = job->created_ms;
-    job->stats.finished = true;
-    job->stats.spp_target = job->stats.spp_done = options.spp;
+    job.state = JobState::done;
+    job.cache_hit = true;
+    job.started_ms = job.finished_ms = job.created_ms;
+    job.stats.finished = true;
+    job.stats.spp_target = job.stats.spp_done = options.spp;
+  } else {
+    job.textures = hashes;  // the text and textures are kept for re-runs
   }
-  if (!job->cache_key.empty()) metrics_.cache(hit);
+  if (!job.cache_key.empty()) metrics_.cache(hit);
   try {
-    if (!hit) {
-      keep_textures(*job, *scene, textures);
-      store_.save_scene(job->id, scene_text);
-    }
-    store_.save_record(*job);
+    if (!hit) keep_textures(job.textures, *scene, textures);
+    job = jobs_->create(std::move(job), scene_text);
   } catch (const std::exception& ex) {
-    release_textures(*job);
-    {
-      std::lock_guard lock(mu_);
-      if (--image_refs_[job->image_name] == 0) image_refs_.erase(job->image_name);
-    }
+    if (!hit) release_textures(job.textures);
+    release_image(job.image_name);
     ApiError e = api_error(503, "storage_error", std::string("cannot store the job: ") + ex.what());
     e.retry_after = 10;
-    return {nullptr, e};
+    return {std::nullopt, e};
   }
-  {
-    std::lock_guard lock(mu_);
-    jobs_[job->id] = job;
+  if (!hit) {
+    auto run = std::make_shared<Job>();
+    run->id = job.id;
+    run->client = job.client;
+    run->priority = job.options.priority;
+    run->scene = scene;
+    run->options = options;
+    scheduler_->submit(std::move(run));
   }
-  if (!hit) scheduler_->submit(job);
   return {job, {}};
 }
 

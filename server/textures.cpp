@@ -63,12 +63,8 @@ ApiError Service::resolve_uploads(Scene& scene, const TextureFiles& files) const
   return {};
 }
 
-void Service::keep_textures(const Job& job, const Scene& scene, const TextureFiles& files) {
-  std::vector<std::string> hashes;
-  {
-    std::lock_guard jl(job.mu);
-    hashes = job.textures;
-  }
+void Service::keep_textures(const std::vector<std::string>& hashes, const Scene& scene,
+                            const TextureFiles& files) {
   {
     // Counted before the files are written: a finishing job that shares one cannot delete it
     // in between (it deletes under the same lock, and only at zero).
@@ -76,21 +72,16 @@ void Service::keep_textures(const Job& job, const Scene& scene, const TextureFil
     for (const std::string& h : hashes) ++texture_refs_[h];
   }
   for (size_t i = 0; i < hashes.size(); ++i)
-    store_.save_texture(hashes[i], files.at(scene.textures[i].path));
+    blobs_.put(BlobKind::texture, hashes[i], files.at(scene.textures[i].path));
 }
 
-void Service::release_textures(Job& job) {
-  std::vector<std::string> hashes;
-  {
-    std::lock_guard jl(job.mu);
-    hashes.swap(job.textures);
-  }
+void Service::release_textures(const std::vector<std::string>& hashes) {
   std::lock_guard lock(mu_);
   for (const std::string& h : hashes) {
     auto it = texture_refs_.find(h);
     if (it == texture_refs_.end() || --it->second > 0) continue;
     texture_refs_.erase(it);
-    store_.remove_texture(h);
+    blobs_.remove(BlobKind::texture, h);
   }
 }
 
@@ -100,7 +91,7 @@ std::shared_ptr<const Scene> Service::reload_scene(const std::string& text,
   if (!loaded.scene || loaded.scene->textures.size() != hashes.size()) return nullptr;
   TextureFiles files;
   for (size_t i = 0; i < hashes.size(); ++i) {
-    auto bytes = store_.load_texture(hashes[i]);
+    auto bytes = blobs_.get(BlobKind::texture, hashes[i]);
     if (!bytes || sha256_hex(*bytes) != hashes[i]) return nullptr;  // lost or damaged
     files[loaded.scene->textures[i].path] = std::move(*bytes);
   }
@@ -111,8 +102,8 @@ std::shared_ptr<const Scene> Service::reload_scene(const std::string& text,
 
 void Service::sweep_textures() {
   std::lock_guard lock(mu_);
-  for (const std::string& name : store_.texture_names())
-    if (!texture_refs_.count(name)) store_.remove_texture(name);
+  for (const std::string& name : blobs_.names(BlobKind::texture))
+    if (!texture_refs_.count(name)) blobs_.remove(BlobKind::texture, name);
 }
 
 }  // namespace rayfarm::server

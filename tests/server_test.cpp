@@ -1247,6 +1247,31 @@ TEST(ServerCompare, SceneAndImageRendersTheReference) {
   EXPECT_EQ(json_of(off)["identical"], false);
 }
 
+// The reference render is waited for on the HTTP thread: it needs a waiting slot like
+// ?wait=1, or many /compare requests could hold every HTTP thread.
+TEST(ServerCompare, ASceneToRenderNeedsAWaitingSlot) {
+  Settings s = test_settings();
+  s.max_waiting_requests = 0;
+  TestServer server(s);
+  auto c = server.client();
+  std::string mine = local_render(kScene, {{"spp", "1"}});
+  auto r = c->Post("/compare", httplib::MultipartFormDataItems{
+                                   {"scene", kScene, "scene.txt", "text/plain"},
+                                   {"image", mine, "mine.png", "image/png"}});
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 503) << r->body;
+  EXPECT_EQ(error_of(r)["code"], "busy");
+  EXPECT_EQ(r->get_header_value("Retry-After"), "2");
+  // Nothing was rendered for it.
+  EXPECT_TRUE(json_of(c->Get("/jobs"))["jobs"].empty());
+  // Two images need no render and no slot.
+  auto two = c->Post("/compare", httplib::MultipartFormDataItems{
+                                     {"a", mine, "a.png", "image/png"},
+                                     {"b", mine, "b.png", "image/png"}});
+  ASSERT_TRUE(two);
+  EXPECT_EQ(two->status, 200) << two->body;
+}
+
 TEST(ServerCompare, DifferentSizesAre422) {
   TestServer server;
   auto c = server.client();
@@ -2739,6 +2764,146 @@ TEST(ServerCache, ASceneAndItsTwinShareOneResultWhateverCarriesTheOptions) {
   auto other = c->Post("/render?wait=1&width=40&height=30&spp=3", read("minimal.txt"), "text/plain");
   ASSERT_TRUE(other);
   EXPECT_EQ(other->get_header_value("X-Cache"), "miss");
+}
+
+// ---- Priorities and Idempotency-Key ---------------------------------------------------------
+
+TEST(ServerPriority, TheStatusShowsItAndWaitMeansInteractive) {
+  TestServer server;
+  auto c = server.client();
+  const std::string batch = submit(*c, "priority=batch&spp=2");
+  Json st = status_of(*c, batch);
+  EXPECT_EQ(st["priority"], "batch");
+  EXPECT_EQ(st["options"]["priority"], "batch");
+  EXPECT_EQ(status_of(*c, submit(*c, "spp=3"))["priority"], "normal");
+  auto waited = c->Post("/render?wait=1&spp=4", kScene, "text/plain");
+  ASSERT_TRUE(waited);
+  ASSERT_EQ(waited->status, 200);
+  EXPECT_EQ(status_of(*c, waited->get_header_value("X-Job-Id"))["priority"], "interactive");
+  // Named, it wins over the wait's default.
+  auto named = c->Post("/render?wait=1&spp=5&priority=batch", kScene, "text/plain");
+  ASSERT_TRUE(named);
+  EXPECT_EQ(status_of(*c, named->get_header_value("X-Job-Id"))["priority"], "batch");
+  auto bad = c->Post("/render?priority=urgent", kScene, "text/plain");
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->status, 400);
+  EXPECT_EQ(error_of(bad)["path"], "priority");
+  EXPECT_NE(error_of(bad)["message"].get<std::string>().find("interactive"), std::string::npos);
+  wait_final(*c, batch);
+}
+
+TEST(ServerPriority, ItDoesNotSplitTheCache) {
+  TestServer server;
+  auto c = server.client();
+  auto first = c->Post("/render?wait=1&spp=2&priority=batch", kScene, "text/plain");
+  ASSERT_TRUE(first);
+  ASSERT_EQ(first->status, 200);
+  auto second = c->Post("/render?wait=1&spp=2&priority=interactive", kScene, "text/plain");
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->get_header_value("X-Cache"), "hit");
+  EXPECT_EQ(second->get_header_value("ETag"), first->get_header_value("ETag"));
+}
+
+// A client at its limit of 4 rendering jobs queues the rest: an interactive job sent last is
+// the next to start, ahead of earlier normal and batch ones.
+TEST(ServerPriority, AHigherClassStartsFirstWhateverItsArrival) {
+  Settings s = test_settings();
+  s.workers = 1;
+  TestServer server(s);
+  auto c = server.client();
+  std::vector<std::string> ids;
+  for (int i = 0; i < 4; ++i) ids.push_back(submit(*c, kLong + std::string("&seed=") + std::to_string(i)));
+  for (const std::string& id : ids) wait_running(*c, id);
+  const std::string batch = submit(*c, kLong + std::string("&priority=batch"));
+  const std::string normal = submit(*c, kLong + std::string("&seed=9"));
+  const std::string interactive = submit(*c, kLong + std::string("&priority=interactive"));
+  EXPECT_EQ(status_of(*c, interactive)["queue_position"], 1);
+  EXPECT_EQ(status_of(*c, normal)["queue_position"], 2);
+  EXPECT_EQ(status_of(*c, batch)["queue_position"], 3);
+  EXPECT_EQ(code_of(c->Delete("/jobs/" + ids[0])), 200);
+  EXPECT_NE(wait_running(*c, interactive)["state"], "queued");
+  EXPECT_EQ(status_of(*c, batch)["state"], "queued");
+  for (const std::string& id : ids) c->Delete("/jobs/" + id);
+  for (const std::string& id : {batch, normal, interactive}) c->Delete("/jobs/" + id);
+}
+
+httplib::Result post_keyed(httplib::Client& c, const std::string& key, const std::string& q = "spp=2",
+                           const std::string& body = kScene) {
+  return c.Post(query("/render", q), {{"Idempotency-Key", key}}, body, "text/plain");
+}
+
+TEST(ServerIdempotency, TheSameKeyGivesTheSameJobPerClient) {
+  TestServer server;
+  auto alice = server.client("alice-token");
+  auto first = post_keyed(*alice, "4f1c-retry-1", kLong);
+  ASSERT_TRUE(first);
+  ASSERT_EQ(first->status, 202) << first->body;
+  EXPECT_FALSE(first->has_header("Idempotent-Replayed"));
+  const std::string id = json_of(first)["id"];
+  auto again = post_keyed(*alice, "4f1c-retry-1", kLong);
+  ASSERT_TRUE(again);
+  ASSERT_EQ(again->status, 202) << again->body;
+  EXPECT_EQ(json_of(again)["id"], id);
+  EXPECT_EQ(again->get_header_value("Idempotent-Replayed"), "true");
+  EXPECT_EQ(json_of(alice->Get("/jobs"))["jobs"].size(), 1u);  // not a second render
+  // Keys are per client: bob's same key is bob's own job.
+  auto bob = server.client("bob-token");
+  auto bobs = post_keyed(*bob, "4f1c-retry-1", kLong);
+  ASSERT_TRUE(bobs);
+  ASSERT_EQ(bobs->status, 202);
+  EXPECT_NE(json_of(bobs)["id"], id);
+  alice->Delete("/jobs/" + id);
+  bob->Delete("/jobs/" + json_of(bobs)["id"].get<std::string>());
+}
+
+TEST(ServerIdempotency, AKeyWithAnotherRequestIs422AndBadKeysAre400) {
+  TestServer server;
+  auto c = server.client();
+  auto first = post_keyed(*c, "k-1");
+  ASSERT_TRUE(first);
+  ASSERT_EQ(first->status, 202);
+  const std::string id = json_of(first)["id"];
+  auto other = post_keyed(*c, "k-1", "spp=3");
+  ASSERT_TRUE(other);
+  EXPECT_EQ(other->status, 422);
+  EXPECT_EQ(error_of(other)["code"], "idempotency_key_reused");
+  EXPECT_NE(error_of(other)["message"].get<std::string>().find(id), std::string::npos);
+  // The order of the options is not another request; waiting for the answer is not either.
+  auto waited = post_keyed(*c, "k-1", "wait=1&spp=2");
+  ASSERT_TRUE(waited);
+  EXPECT_EQ(waited->status, 200);
+  EXPECT_EQ(waited->get_header_value("X-Job-Id"), id);
+  EXPECT_EQ(waited->get_header_value("Idempotent-Replayed"), "true");
+  for (const std::string& key : {std::string(256, 'a'), std::string("two words")}) {
+    auto bad = post_keyed(*c, key);
+    ASSERT_TRUE(bad);
+    EXPECT_EQ(bad->status, 400);
+    EXPECT_EQ(error_of(bad)["code"], "invalid_idempotency_key");
+  }
+  auto longest = post_keyed(*c, std::string(255, 'b'));
+  ASSERT_TRUE(longest);
+  EXPECT_EQ(longest->status, 202);
+}
+
+TEST(ServerRestart, IdempotencyKeysOutliveARestart) {
+  TempDir dir;
+  Settings s = test_settings();
+  s.results_dir = dir.path.string();
+  std::string id;
+  {
+    TestServer server(s);
+    auto r = post_keyed(*server.client(), "restart-key", "wait=1&spp=2");
+    ASSERT_TRUE(r);
+    ASSERT_EQ(r->status, 200);
+    id = r->get_header_value("X-Job-Id");
+  }
+  TestServer server(s);
+  auto again = post_keyed(*server.client(), "restart-key", "spp=2");
+  ASSERT_TRUE(again);
+  ASSERT_EQ(again->status, 202);
+  EXPECT_EQ(json_of(again)["id"], id);
+  EXPECT_EQ(json_of(again)["state"], "done");
+  EXPECT_EQ(again->get_header_value("Idempotent-Replayed"), "true");
 }
 
 }  // namespace

@@ -22,6 +22,9 @@ enum class ImageFormat { png, ppm };
 enum class Profile { lecture, cpsc102 };
 // Colour to byte: floor(255c + 0.5), or (unsigned char)(255c).
 enum class Rounding { nearest, truncate };
+// A server's queue class: every interactive job starts before any normal one, and every normal
+// one before any batch one. Never changes a pixel.
+enum class Priority { interactive, normal, batch };
 
 struct RenderOptions {
   int spp = 1;
@@ -44,6 +47,7 @@ struct RenderOptions {
   double target_error = 0;  // stop sampling once the error estimate (8-bit levels) is below; 0 = off
   double time_limit = 0;    // seconds; stop sampling when out of time; 0 = off
   bool specialize = true;   // run only the pipeline parts the scene needs (off: for testing)
+  Priority priority = Priority::normal;  // a server's queue class (rayfarmd: wait=1 means interactive)
 
   int effective_max_depth() const;
   double effective_max_dist() const;
@@ -101,6 +105,7 @@ std::string_view to_string(Highlight h);
 std::string_view to_string(ImageFormat f);
 std::string_view to_string(Profile p);
 std::string_view to_string(Rounding r);
+std::string_view to_string(Priority p);
 std::string format_number(double v);  // shortest text that reads back to the same double
 
 }  // namespace rayfarm

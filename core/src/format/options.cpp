@@ -27,6 +27,9 @@ constexpr EnumTable<Profile, 2> kProfiles({{"lecture", Profile::lecture},
                                            {"cpsc102", Profile::cpsc102}});
 constexpr EnumTable<Rounding, 2> kRoundings({{"nearest", Rounding::nearest},
                                              {"truncate", Rounding::truncate}});
+constexpr EnumTable<Priority, 3> kPriorities({{"interactive", Priority::interactive},
+                                              {"normal", Priority::normal},
+                                              {"batch", Priority::batch}});
 
 // What each profile means for the options a request leaves unset: the lecture's conventions,
 // or the course program's MAX_DIST 20, 64 bounces and truncated bytes.
@@ -213,6 +216,12 @@ constexpr OptionSpec kOptions[] = {
     {"specialize", "true|false", "run only the pipeline parts the scene needs (false: testing)",
      [](Opts& o, Text v) { return bool_in(v, o.specialize); },
      [](const Opts& o) { return bool_text(o.specialize); }, false, "false"},
+    // Which jobs a busy server starts first: when, never what.
+    {"priority", kPriorities.value_help(),
+     "queue class on a server: interactive, then normal, then batch (default: interactive with "
+     "wait=1, else normal)",
+     [](Opts& o, Text v) { return enum_in(kPriorities, v, o.priority); },
+     [](const Opts& o) { return std::string(to_string(o.priority)); }, false, "batch"},
 };
 
 }  // namespace
@@ -278,6 +287,7 @@ std::string_view to_string(Highlight h) { return kHighlights.name(h); }
 std::string_view to_string(ImageFormat f) { return kFormats.name(f); }
 std::string_view to_string(Profile p) { return kProfiles.name(p); }
 std::string_view to_string(Rounding r) { return kRoundings.name(r); }
+std::string_view to_string(Priority p) { return kPriorities.name(p); }
 
 std::string format_number(double v) {
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
