@@ -2,7 +2,7 @@
 -- The farm's job-state machine, run inside Redis 7.0 as one Function library so that every
 -- transition is atomic and takes one round trip. Built into rayfarmd (farm_library.cmake) and
 -- loaded with FUNCTION LOAD REPLACE at every connect; Functions persist in the AOF, unlike the
--- EVALSHA script cache. Design: /work/shared/design/farm-redis.md, section 3.
+-- EVALSHA script cache.
 --
 -- Rules every function keeps:
 --  * ARGV[1] is the key prefix P; key names are computed here (one primary, no Cluster).

@@ -2,7 +2,7 @@
 // locking: a node gives each of its threads its own Connection, and HTTP threads lease one
 // from a Pool).
 //
-// Why this wrapper and not raw hiredis (farm-redis.md section 5, pitfalls 1-10):
+// Why this wrapper and not raw hiredis 0.14:
 //  * After any I/O error, EOF or timeout a hiredis context is dead. The context is dropped and
 //    the next command reconnects, no sooner than a capped exponential backoff with jitter
 //    allows (so a Redis outage does not meet a thundering herd); every (re)connect re-applies
