@@ -16,7 +16,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr int kFormat = 1;  // of FarmJob's JSON
-constexpr size_t kPreparedKept = 8;
+// Prepared jobs kept (a large scene's structures take tens of megabytes).
+constexpr size_t kPreparedKept = 4;
 
 std::string ms_text(std::chrono::milliseconds ms) { return std::to_string(ms.count()); }
 
@@ -202,8 +203,11 @@ std::shared_ptr<const FarmNode::Prepared> FarmNode::prepare(FarmClient& fc, cons
       return nullptr;
     }
   p->scene = std::make_shared<const Scene>(std::move(*loaded.scene));
+  p->render = PreparedRender::create(*p->scene, p->options, error);
+  if (!p->render) return nullptr;
   std::lock_guard lock(mu_);
-  prepared_[unit.job] = p;
+  // Another worker may have prepared the same job meanwhile: keep one.
+  if (auto [it, added] = prepared_.emplace(unit.job, p); !added) return it->second;
   prepared_order_.push_back(unit.job);
   if (prepared_order_.size() > kPreparedKept) {
     prepared_.erase(prepared_order_.front());
@@ -219,7 +223,7 @@ bool FarmNode::render_unit(FarmClient& fc, const Unit& unit, const std::atomic<b
   try {
     p = prepare(fc, unit, &error);
     if (p && (unit.index < 0 || unit.index >= p->job.units)) error = "unit out of range";
-    else if (p) job = RenderJob::create(*p->scene, p->options, p->job.unit_range(unit.index), &error);
+    else if (p) job = p->render->job(p->job.unit_range(unit.index), &error);
   } catch (const std::exception& e) {
     error = e.what();
   }

@@ -109,6 +109,7 @@ class FarmNode {
     FarmJob job;
     RenderOptions options;
     std::shared_ptr<const Scene> scene;
+    std::shared_ptr<const PreparedRender> render;  // built once for all of the job's units
   };
 
   void work(int index);

@@ -89,6 +89,8 @@ class RenderJob {
   // Per tile of range(), in tile order: the summed squared standard errors of its pixels
   // after the last pass (what the whole image's error_estimate adds up, in tile order).
   virtual std::vector<double> tile_errors() const = 0;
+  // The pixels of range()'s tiles: each tile's rows top to bottom, tiles in order.
+  virtual std::vector<std::uint8_t> range_pixels() const = 0;
 };
 
 // A scene prepared for one set of options (its acceleration structures built once), from

@@ -36,12 +36,14 @@ class TiledRender final : public RenderJob {
         film_(film),
         grid_(p_.width(), p_.height()),
         range_(range),
+        row0_(grid_.bounds(range.first).r0),
+        row1_(grid_.bounds(range.end - 1).r1),
         passes_(std::max(1, p_.spp() / p_.samples_per_pass())),
-        image_(p_.width(), p_.height()),
+        image_(p_.width(), row1_ - row0_),
         next_tile_(range.first),
         prepare_ms_(prepare_ms) {
     if (passes_ > 1) {
-      sum_.assign(static_cast<size_t>(p_.width()) * p_.height() * 3, 0.0);
+      sum_.assign(static_cast<size_t>(p_.width()) * (row1_ - row0_) * 3, 0.0);
       sum_sq_.assign(sum_.size(), 0.0);
     }
     tile_error_.assign(grid_.count(), 0.0);
@@ -91,7 +93,21 @@ class TiledRender final : public RenderJob {
 
   Image image() const override {
     std::lock_guard lock(mu_);
-    return image_;
+    if (row0_ == 0 && row1_ == p_.height()) return image_;
+    Image full(p_.width(), p_.height());
+    std::copy(image_.rgb.begin(), image_.rgb.end(), full.row(row0_));
+    return full;
+  }
+
+  std::vector<std::uint8_t> range_pixels() const override {
+    std::lock_guard lock(mu_);
+    std::vector<std::uint8_t> out;
+    for (int t = range_.first; t < range_.end; ++t) {
+      const TileBounds b = grid_.bounds(t);
+      for (int r = b.r0; r < b.r1; ++r)
+        out.insert(out.end(), image_.row(r - row0_) + b.x0 * 3, image_.row(r - row0_) + b.x1 * 3);
+    }
+    return out;
   }
 
   RenderStats stats() const override {
@@ -136,7 +152,7 @@ class TiledRender final : public RenderJob {
     const double n = pass + 1;
     for (int r = b.r0; r < b.r1; ++r)
       for (int x = b.x0; x < b.x1; ++x, ++c) {
-        size_t i = (static_cast<size_t>(r) * p_.width() + x) * 3;
+        size_t i = (static_cast<size_t>(r - row0_) * p_.width() + x) * 3;
         for (int k = 0; k < 3; ++k) {
           double ck = (*c)[k];
           sum_[i + k] = film_.accumulate(sum_[i + k], ck);
@@ -157,7 +173,7 @@ class TiledRender final : public RenderJob {
     const TileBounds b = grid_.bounds(tile);
     const int w = b.width(), rows = b.rows();
     for (int r = 0; r < rows; ++r)
-      std::copy_n(bytes.data() + static_cast<size_t>(r) * w * 3, w * 3, image_.row(b.r0 + r) + b.x0 * 3);
+      std::copy_n(bytes.data() + static_cast<size_t>(r) * w * 3, w * 3, image_.row(b.r0 - row0_ + r) + b.x0 * 3);
   }
 
   // Called under the lock by whoever finishes the last tile of a pass.
@@ -195,11 +211,12 @@ class TiledRender final : public RenderJob {
   const Film film_;
   const TileGrid grid_;
   const TileRange range_;
+  const int row0_, row1_;  // the rows the range's tiles span: the image and sums kept
   const int passes_;
 
   mutable std::mutex mu_;
-  Image image_;
-  std::vector<double> sum_, sum_sq_;  // per pixel channel, only with several passes
+  Image image_;                       // rows row0_ to row1_
+  std::vector<double> sum_, sum_sq_;  // per pixel channel of those rows, only with several passes
   std::vector<double> tile_error_;    // per tile: summed squared standard errors, last pass
   int next_tile_ = 0;
   int done_in_pass_ = 0;

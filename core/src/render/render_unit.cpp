@@ -94,18 +94,11 @@ bool fail(std::string* error, std::string message) {
 
 UnitResult unit_result(const RenderJob& job) {
   const RenderStats st = job.stats();
-  const Image image = job.image();
-  const TileGrid grid(job.width(), job.height());
   UnitResult u;
   u.width = job.width();
   u.height = job.height();
   u.range = job.range();
-  u.pixels.reserve(range_pixels(grid, u.range) * 3);
-  for (int t = u.range.first; t < u.range.end; ++t) {
-    const TileBounds b = grid.bounds(t);
-    for (int r = b.r0; r < b.r1; ++r)
-      u.pixels.insert(u.pixels.end(), image.row(r) + b.x0 * 3, image.row(r) + b.x1 * 3);
-  }
+  u.pixels = job.range_pixels();
   u.tile_errors = job.tile_errors();
   u.has_estimate = st.error_estimate >= 0;
   u.spp_done = st.spp_done;
