@@ -41,9 +41,168 @@ struct RevsurfRay {
   double y0, dy, rr, r0d, rdd;
 };
 
-// The first t > 0 at which the ray crosses the surface within 0 <= y <= height, or -1.
-// `own`: the ray leaves the surface itself; the crossing it starts on does not count.
-inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay& r, bool own) {
+namespace revsurf_detail {
+
+// Bisection of [a, b], where fl(f) has the sign of fa at a and the other at b, down to
+// adjacent doubles: the b where it ends. Only the sign of fl(f(m)) at each midpoint steers it.
+template <class F>
+inline double bisect(const F& f, double a, double b, double fa, int steps = 200) {
+  for (int k = 0; k < steps; ++k) {
+    const double m = 0.5 * (a + b);
+    if (m <= a || m >= b) break;
+    const double fm = f(m);
+    if ((fa <= 0) == (fm <= 0)) {
+      a = m;
+      fa = fm;
+    } else {
+      b = m;
+    }
+  }
+  return b;
+}
+
+// The same bisection for the two waves (r = 1 + cos(y)/2 or 1 + sin(y)/2), the same midpoints
+// and the same answer, with a sine only where the sign of fl(f(m)) is not certain otherwise.
+//
+// Let f* be f in real arithmetic (the libm sine replaced by the true one). For x >= 0, with
+// p1 = fl(x rdd), p3 = fl(x fl(2 r0d + p1)) and q = fl(rr + p3) as f computes them,
+// |fl(f(x)) − f*(x)| <= E(x) = u (2.5 |q| + 2.5 |p3| + 1.5 x p1 + 16 + 4 (|y0| + x |dy|)),
+// u = 2^-53: the quadratic errs by at most u (1.001 |q| + 2.001 |p3| + x² rdd) (each
+// operation by u times its result, carried through the products by x); the last subtraction
+// by u (|q| + 2.26); r² by 2.25u + 3.01 (2u + Δy/2), r's rounding u plus half of the sine's
+// error, taken as 2u (one ulp is at most u, as |sin| <= 1), and its argument's error Δy <=
+// 2.01u (|y0| + x |dy|). In all at most u (2.001 |q| + 2.001 |p3| + x² rdd + 10.52 + 3.04
+// (|y0| + x |dy|)); E's constants exceed those by a fifth and more, which covers E's own
+// rounding (a few u, relative) and the difference between the computed q, p3 and exact ones.
+// Over [x, x + w], |q| and |p3| grow by at most |q'| w <= 2 (|r0d| + (x + w) rdd) w, and the
+// other terms are largest at x + w: error_over() bounds E there.
+//
+// |f*''| <= M2 = 2 rdd + 2 dy² (r²'' = dy² (cos²/2 − r sin), at most 2 dy²). If f*(A) lies
+// within rA of cA and f*(B) within rB of cB, then at t = A + λ (B − A), f*(t) lies within
+// (1 − λ) rA + λ rB + M2 (t − A)(B − t)/2 of L(t) = (1 − λ) cA + λ cB: between two lines, the
+// lower from cA − rA to cB − rB, the upper from cA + rA to cB + rB, widened by M2 (B − A)²/8.
+// Where the lower line exceeds that widening plus E's bound over [A, B], fl(f(t)) > 0; where
+// the upper one is below minus that, fl(f(t)) < 0 (the margin D also takes 2u (|cA| + rA +
+// |cB| + rB) for the rounding of the lines' ends). Near A that holds for t − A < d1, near B
+// for B − t < d2 (the lines are straight, so each region is an interval from its end), and
+// d1, d2 are computed short by 2^-40 relative, more than their rounding and that of t − A.
+//
+// The bisection takes every midpoint in those regions with its certain sign: a subtraction
+// and a comparison. At a midpoint in neither, it derives the regions again from the bracket
+// it has come to: an end reached by a certain sign gets the enclosure above (its center
+// computed with an error below 8u (|cA| + |cB|), λ's within 4u (rA + rB)), or, where that
+// is wider than 4 E, fl(f) ± E evaluated there (evaluations off the midpoints only cost
+// time). A midpoint still uncertain is evaluated, or, once the regions leave most of the
+// bracket uncertain (the rounding noise about the root, where the rest of the midpoints
+// fall), the plain bisection takes over for the steps left. Anything not finite (overflow,
+// NaN) leaves the regions empty, so f is evaluated, as before. `trust` < 1 shrinks the
+// margin: for tests only, to show that a wrong certificate changes answers.
+template <class F, class Ray>
+inline double bisect_wave(const F& f, const Ray& r, double a, double b, double fa, double fb,
+                          double trust) {
+  constexpr double u = 0x1p-53, slack = 1 + 0x1p-40, shrink = 1 - 0x1p-40;
+  const double ay0 = std::abs(r.y0), ady = std::abs(r.dy), a2r0d = 2 * std::abs(r.r0d);
+  const double m2_8 = 0.125 * slack * 2 * (r.rdd + r.dy * r.dy + 0x1p-1000);
+  auto error = [&](double x) {
+    const double p1 = x * r.rdd, p3 = x * (2 * r.r0d + p1), q = r.rr + p3;
+    return u * (2.5 * (std::abs(q) + std::abs(p3)) + 1.5 * x * p1 + 16 + 4 * (ay0 + x * ady));
+  };
+  auto error_over = [&](double x, double w) {
+    const double p1 = x * r.rdd, p3 = x * (2 * r.r0d + p1), q = r.rr + p3, xe = x + w;
+    return u * (2.5 * (std::abs(q) + std::abs(p3)) + 5 * (a2r0d + 2 * xe * r.rdd) * w +
+                1.5 * xe * (xe * r.rdd) + 16 + 4 * (ay0 + xe * ady));
+  };
+  const bool neg_a = fa <= 0;
+  // Enclosures at a and b (valid unless that end was reached by a certain sign since the
+  // regions were derived), the regions' bracket [A, B] with its enclosures, and the regions.
+  double ca = fa, ra = error(a), cb = fb, rb = error(b);
+  double A = a, B = b, cA = ca, rA = ra, cB = cb, rB = rb, Aeval = a, Beval = b, d1 = -1, d2 = -1;
+  bool neg1 = false, neg2 = false;
+  auto derive = [&] {
+    A = a, B = b, cA = ca, rA = ra, cB = cb, rB = rb;
+    const double w = b - a;
+    const double D =
+        trust * slack *
+        (m2_8 * w * w + error_over(a, w) + 2 * u * (std::abs(ca) + ra + std::abs(cb) + rb));
+    const double lo_a = ca - ra, lo_b = cb - rb, up_a = ca + ra, up_b = cb + rb;
+    d1 = d2 = -1;  // NaN anywhere leaves them so
+    if (lo_a > D) {
+      d1 = lo_b < lo_a ? shrink * ((lo_a - D) / (lo_a - lo_b) * w) : w;
+      neg1 = false;
+    } else if (up_a < -D) {
+      d1 = up_b > up_a ? shrink * ((-D - up_a) / (up_b - up_a) * w) : w;
+      neg1 = true;
+    }
+    if (lo_b > D) {
+      d2 = lo_a < lo_b ? shrink * ((lo_b - D) / (lo_b - lo_a) * w) : w;
+      neg2 = false;
+    } else if (up_b < -D) {
+      d2 = up_a > up_b ? shrink * ((-D - up_b) / (up_a - up_b) * w) : w;
+      neg2 = true;
+    }
+  };
+  // The enclosure of f* at t in [A, B] that the regions' lines give.
+  auto enclose = [&](double t, double& c, double& rad) {
+    const double lambda = (t - A) / (B - A);
+    c = cA + (cB - cA) * lambda;
+    rad = slack * ((1 - lambda) * rA + lambda * rB + 4 * u * (rA + rB) +
+                   8 * u * (std::abs(cA) + std::abs(cB)) + 4 * m2_8 * (t - A) * (B - t));
+  };
+  derive();
+  for (int k = 0; k < 200; ++k) {
+    const double m = 0.5 * (a + b);
+    if (m <= a || m >= b) break;
+    bool neg_m;
+    if (m - A < d1) {
+      neg_m = neg1;
+    } else if (B - m < d2) {
+      neg_m = neg2;
+    } else {
+      if (a != A || b != B) {  // regions from the bracket come to
+        // An end reached by a certain sign: the lines' enclosure there, or where that is
+        // much wider than E, f evaluated.
+        if (a != A && a != Aeval) {
+          enclose(a, ca, ra);
+          const double e = error(a);
+          if (!(ra <= 4 * e)) ca = f(a), ra = e, Aeval = a;
+        }
+        if (b != B && b != Beval) {
+          enclose(b, cb, rb);
+          const double e = error(b);
+          if (!(rb <= 4 * e)) cb = f(b), rb = e, Beval = b;
+        }
+        derive();
+      }
+      if (m - A < d1) {
+        neg_m = neg1;
+      } else if (B - m < d2) {
+        neg_m = neg2;
+      } else {
+        // Most of the bracket uncertain: it is within the rounding noise about the root,
+        // where the rest of the midpoints will be too. Plain bisection from here.
+        if (!(d1 + d2 > 0.5 * (b - a))) return bisect(f, a, b, neg_a ? -1.0 : 1.0, 200 - k);
+        const double fm = f(m);
+        neg_m = fm <= 0;
+        if (neg_a == neg_m) {
+          a = m, ca = fm, ra = error(m), Aeval = m;
+        } else {
+          b = m, cb = fm, rb = error(m), Beval = m;
+        }
+        continue;
+      }
+    }
+    if (neg_a == neg_m) {
+      a = m;
+    } else {
+      b = m;
+    }
+  }
+  return b;
+}
+
+// revsurf_first_crossing below, with the certificate's `trust` of bisect_wave.
+inline double first_crossing(int surfer, double height, const RevsurfRay& r, bool own,
+                             double trust) {
   height = revsurf_top(surfer, height);
   double lo = 0, hi = 1e300;
   if (r.dy != 0) {
@@ -71,8 +230,9 @@ inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay
   };
   // |f'| <= 2|r0d + t rdd| + 2 r |r'| |dy|, the first term largest at an end of [lo, hi].
   const double slope_bound = surfer == 1 ? 2 * rmax * 2.0 / 3 : 2 * 1.5 * 0.5;
-  const double lipschitz = 2 * std::max(std::abs(r.r0d + lo * r.rdd), std::abs(r.r0d + hi * r.rdd)) +
-                           slope_bound * std::abs(r.dy);
+  const double lipschitz =
+      2 * std::max(std::abs(r.r0d + lo * r.rdd), std::abs(r.r0d + hi * r.rdd)) +
+      slope_bound * std::abs(r.dy);
   const double min_step = (hi - lo) / 512;
   double t = lo, v = f(t);
   if (own) {  // off the surface it starts on: the side the ray is on decides
@@ -84,24 +244,22 @@ inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay
     const double next = std::min(t + step, hi);
     const double w = f(next);
     if ((v <= 0) != (w <= 0)) {
-      double a = t, b = next, fa = v;
-      for (int k = 0; k < 200; ++k) {
-        const double m = 0.5 * (a + b);
-        if (m <= a || m >= b) break;
-        const double fm = f(m);
-        if ((fa <= 0) == (fm <= 0)) {
-          a = m;
-          fa = fm;
-        } else {
-          b = m;
-        }
-      }
+      const double b =
+          surfer == 1 ? bisect(f, t, next, v) : bisect_wave(f, r, t, next, v, w, trust);
       if (b > 0) return b;
     }
     t = next;
     v = w;
   }
   return -1;
+}
+
+}  // namespace revsurf_detail
+
+// The first t > 0 at which the ray crosses the surface within 0 <= y <= height, or -1.
+// `own`: the ray leaves the surface itself; the crossing it starts on does not count.
+inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay& r, bool own) {
+  return revsurf_detail::first_crossing(surfer, height, r, own, 1.0);
 }
 
 }  // namespace rayfarm
