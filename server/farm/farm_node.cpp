@@ -151,7 +151,11 @@ void FarmNode::work(int index) {
     if (unit && !*unit) unit = fc.block_for_work();
     counters_.redis_calls += 1;
     counters_.redis_micros += std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - t0).count();
-    if (!unit || !*unit) continue;
+    if (!unit) {  // Redis refused (full, busy) or the connection broke: do not hammer it
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      continue;
+    }
+    if (!*unit) continue;
     const Unit u = **unit;
     auto stop = std::make_shared<std::atomic<bool>>(false);
     {
