@@ -45,6 +45,13 @@ using Json = nlohmann::json;
 using Clock = std::chrono::steady_clock;
 using namespace std::chrono_literals;
 
+// rayfarmd's command line, as main() reads it.
+std::optional<Settings> parse_flags(std::vector<std::string> args, int& code) {
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  return parse_settings(static_cast<int>(argv.size()), argv.data(), code);
+}
+
 // A write to a socket the server has closed must fail, not kill the test process.
 const bool kSigpipeIgnored = [] {
   std::signal(SIGPIPE, SIG_IGN);
@@ -1028,24 +1035,19 @@ TEST(ServerProfiles, DefaultProfileAppliesWhenNeitherRequestNorSceneNamesOne) {
 }
 
 TEST(ServerProfiles, DefaultProfileIsAFlagAndAnEnvironmentVariable) {
-  auto parse = [](std::vector<std::string> args, int& code) {
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    return parse_settings(static_cast<int>(argv.size()), argv.data(), code);
-  };
   int code = 0;
-  auto s = parse({"rayfarmd"}, code);
+  auto s = parse_flags({"rayfarmd"}, code);
   ASSERT_TRUE(s);
   EXPECT_EQ(s->default_profile, Profile::lecture);
-  s = parse({"rayfarmd", "--default-profile", "cpsc102"}, code);
+  s = parse_flags({"rayfarmd", "--default-profile", "cpsc102"}, code);
   ASSERT_TRUE(s);
   EXPECT_EQ(s->default_profile, Profile::cpsc102);
   ::setenv("RAYFARM_DEFAULT_PROFILE", "cpsc102", 1);
-  s = parse({"rayfarmd"}, code);
+  s = parse_flags({"rayfarmd"}, code);
   ::unsetenv("RAYFARM_DEFAULT_PROFILE");
   ASSERT_TRUE(s);
   EXPECT_EQ(s->default_profile, Profile::cpsc102);
-  EXPECT_FALSE(parse({"rayfarmd", "--default-profile", "cpsc101"}, code));
+  EXPECT_FALSE(parse_flags({"rayfarmd", "--default-profile", "cpsc101"}, code));
   EXPECT_EQ(code, 2);
 }
 
@@ -1805,23 +1807,18 @@ TEST(ServerTextures, TooManyOrTooLargeTexturesAre422) {
 }
 
 TEST(ServerTextures, LimitsAreFlagsAndEnvironmentVariables) {
-  auto parse = [](std::vector<std::string> args) {
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    int code = 0;
-    return parse_settings(static_cast<int>(argv.size()), argv.data(), code);
-  };
-  auto s = parse({"rayfarmd"});
+  int code = 0;
+  auto s = parse_flags({"rayfarmd"}, code);
   ASSERT_TRUE(s);
   EXPECT_EQ(s->max_textures, 16);
   EXPECT_EQ(s->max_texture_bytes, 8u << 20);
-  s = parse({"rayfarmd", "--max-textures", "3", "--max-texture-bytes", "1000"});
+  s = parse_flags({"rayfarmd", "--max-textures", "3", "--max-texture-bytes", "1000"}, code);
   ASSERT_TRUE(s);
   EXPECT_EQ(s->max_textures, 3);
   EXPECT_EQ(s->max_texture_bytes, 1000u);
   ::setenv("RAYFARM_MAX_TEXTURES", "5", 1);
   ::setenv("RAYFARM_MAX_TEXTURE_BYTES", "2048", 1);
-  s = parse({"rayfarmd"});
+  s = parse_flags({"rayfarmd"}, code);
   ::unsetenv("RAYFARM_MAX_TEXTURES");
   ::unsetenv("RAYFARM_MAX_TEXTURE_BYTES");
   ASSERT_TRUE(s);
@@ -2246,27 +2243,22 @@ TEST(ServerCors, OnlyTheConfiguredOriginMayCallTheApiWithItsToken) {
 }
 
 TEST(ServerCors, TheOriginIsAFlagAndAnEnvironmentVariableAndMustBeExact) {
-  auto parse = [](std::vector<std::string> args, int& code) {
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    return parse_settings(static_cast<int>(argv.size()), argv.data(), code);
-  };
   int code = 0;
-  auto s = parse({"rayfarmd"}, code);
+  auto s = parse_flags({"rayfarmd"}, code);
   ASSERT_TRUE(s);
   EXPECT_EQ(s->cors_origin, "");
-  s = parse({"rayfarmd", "--cors-origin", "https://Grader.Example.edu:8443"}, code);
+  s = parse_flags({"rayfarmd", "--cors-origin", "https://Grader.Example.edu:8443"}, code);
   ASSERT_TRUE(s);
   EXPECT_EQ(s->cors_origin, "https://grader.example.edu:8443");  // as browsers send it
   ::setenv("RAYFARM_CORS_ORIGIN", "http://localhost:3000", 1);
-  s = parse({"rayfarmd"}, code);
+  s = parse_flags({"rayfarmd"}, code);
   ::unsetenv("RAYFARM_CORS_ORIGIN");
   ASSERT_TRUE(s);
   EXPECT_EQ(s->cors_origin, "http://localhost:3000");
   for (const char* bad : {"*", "https://grader.example.edu/", "https://grader.example.edu/lab",
                           "grader.example.edu", "ftp://grader.example.edu"}) {
     code = 0;
-    EXPECT_FALSE(parse({"rayfarmd", "--cors-origin", bad}, code)) << bad;
+    EXPECT_FALSE(parse_flags({"rayfarmd", "--cors-origin", bad}, code)) << bad;
     EXPECT_EQ(code, 2) << bad;
   }
 }
