@@ -496,6 +496,29 @@ TEST(Formats, JUnitMarkdownHtmlAndJson) {
   EXPECT_EQ(write_result(mixed_result(), Format::json), write_result(r, Format::json));
 }
 
+TEST(Formats, BytesThatAreNotUtf8BecomeReplacementCharacters) {
+  // A student's file name or a backend message may carry any bytes; JSON output stays JSON.
+  GradeResult r;
+  r.assignment = "Lab \xff";
+  r.error = "cannot read 'shot\xfe.ppm'";
+  TestResult t;
+  t.name = "t\xc3";  // a truncated two-byte sequence
+  t.status = "failed";
+  t.message = "your image st\xffu.ppm was not found";
+  t.student_missing = true;
+  r.tests.push_back(t);
+  for (Format f : {Format::gradescope, Format::prairielearn, Format::json}) {
+    const std::string text = write_result(r, f);
+    Json j;
+    ASSERT_NO_THROW(j = Json::parse(text)) << to_string(f);
+    EXPECT_NE(text.find("\xef\xbf\xbd"), std::string::npos) << to_string(f);  // U+FFFD
+  }
+  const std::string autolab = write_result(r, Format::autolab);
+  const std::string body = autolab.substr(0, autolab.size() - 1);
+  Json last;
+  EXPECT_NO_THROW(last = Json::parse(body.substr(body.find_last_of('\n') + 1)));
+}
+
 TEST(Lock, RefusesReferencesThatChanged) {
   const GradeResult r = mixed_result();
   Json lock = lock_json(r);

@@ -537,6 +537,18 @@ TEST(ModelParser, ReportsAnInvalidName) {
   EXPECT_TRUE(is_diag(d, "bad-name", 3, 8, "invalid sphere name '1s'"));
 }
 
+TEST(ModelParser, ReportsATexturePathThatIsNotUtf8) {
+  // JSON and error bodies carry text: such a path could be neither converted nor quoted.
+  Diagnostic d = single_error("texture t { filename bricks\xff.ppm }\n");
+  EXPECT_TRUE(is_diag(d, "bad-name", 3, 22, "invalid file name 'bricks?.ppm'"));
+  Diagnostic lone = single_error("texture t { filename \xe2\x82.ppm }\n");  // truncated
+  EXPECT_EQ(lone.code, "bad-name");
+  // Well-formed UTF-8 is a path like any other.
+  Diagnostics diags;
+  parse_model(with_head("texture t { filename br\xc3\xa9ques.ppm }\n"), diags);
+  EXPECT_FALSE(diags.has_errors());
+}
+
 TEST(ModelParser, AcceptsNamesWithDigitsDotsAndDashes) {
   Scene s =
       scene_of(with_head("material _Chrome.v2-b { specular 1 }\n"

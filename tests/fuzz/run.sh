@@ -25,13 +25,21 @@ for target in model_parser json_scene image_decode http_request; do
   echo "fuzzing $target for ${seconds}s"
   # A finding makes the fuzzer exit non-zero: note it and name the input before failing.
   status=0
+  log="$build/fuzz-$target.log"
   (cd "$build" && ASAN_OPTIONS=detect_leaks=0 ./tests/fuzz/fuzz_$target -max_total_time="$seconds" \
-     -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 "corpus-$target" \
-     2>&1 | grep -E "stat::number_of_executed_units|stat::peak_rss|ERROR|SUMMARY|crash-|timeout-|Done|fuzz property" | head -20) \
-    || status=$?
+     -timeout=10 -rss_limit_mb=4096 -max_len=65536 -print_final_stats=1 "corpus-$target") \
+    >"$log" 2>&1 || status=$?
+  grep -E "stat::number_of_executed_units|stat::peak_rss|Done" "$log" || true
   if [ "$status" != 0 ] || ls "$build"/crash-* "$build"/timeout-* "$build"/oom-* >/dev/null 2>&1; then
-    echo "fuzzer $target failed (exit status $status); failing inputs:"
-    ls "$build"/crash-* "$build"/timeout-* "$build"/oom-* 2>/dev/null || true
+    # The whole report (the exception, the sanitizer's stack) and the input itself, so a
+    # finding on a machine that is gone can still be replayed.
+    echo "fuzzer $target failed (exit status $status); its report:"
+    grep -v -E "^(INFO|#[0-9]+ +(NEW|REDUCE|pulse|RELOAD))" "$log" | tail -60
+    for input in "$build"/crash-* "$build"/timeout-* "$build"/oom-*; do
+      [ -e "$input" ] || continue
+      echo "failing input $input, base64 (first 4 KB):"
+      head -c 4096 "$input" | base64
+    done
     exit 1
   fi
 done

@@ -6,24 +6,11 @@
 #include <cstdint>
 #include <sstream>
 
+#include "util/utf8.h"
+
 namespace rayfarm {
 
 namespace {
-
-// Length of the valid UTF-8 sequence at s[i], or 0.
-size_t utf8_length(std::string_view s, size_t i) {
-  auto byte = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
-  unsigned char c = byte(i);
-  size_t n = c >= 0xf0 ? 4 : c >= 0xe0 ? 3 : c >= 0xc2 ? 2 : 0;
-  if (n == 0 || c > 0xf4 || i + n > s.size()) return 0;
-  for (size_t k = 1; k < n; ++k)
-    if ((byte(i + k) & 0xc0) != 0x80) return 0;
-  unsigned char c1 = byte(i + 1);
-  if ((c == 0xe0 && c1 < 0xa0) || (c == 0xed && c1 > 0x9f) || (c == 0xf0 && c1 < 0x90) ||
-      (c == 0xf4 && c1 > 0x8f))
-    return 0;  // overlong, surrogate or beyond U+10FFFF
-  return n;
-}
 
 // Text as it may be shown on a terminal or in a log: control bytes (an escape sequence in a
 // hostile file) and bytes that are not valid UTF-8 become '?', one for one (so a caret under a

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "util/utf8.h"
+
 namespace rayfarm {
 namespace {
 
@@ -185,7 +187,8 @@ bool is_valid_path(std::string_view path) {
     if (static_cast<unsigned char>(c) <= 0x20 || c == 0x7f || c == '{' || c == '}' || c == '#' ||
         c == ',' || c == '<' || c == '>')
       return false;
-  return path.find("//") == std::string_view::npos;
+  // JSON scenes, error bodies and terminals carry text: a name that is not UTF-8 has no form.
+  return path.find("//") == std::string_view::npos && is_valid_utf8(path);
 }
 
 const AttrDesc* EntityDesc::find(std::string_view key) const {

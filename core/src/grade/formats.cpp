@@ -14,6 +14,12 @@ namespace {
 
 using Json = nlohmann::json;
 
+// Grader output quotes file names and messages a student's files chose: bytes that are not
+// UTF-8 become U+FFFD instead of an exception.
+std::string text(const Json& j, int indent = -1) {
+  return j.dump(indent, ' ', false, Json::error_handler_t::replace);
+}
+
 std::string fixed(double v, int digits = 4) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*f", digits, v);
@@ -176,7 +182,7 @@ std::string gradescope(const GradeResult& r) {
               {"output", header_text(r)},
               {"output_format", "md"},
               {"tests", tests}};
-  return out.dump(2) + "\n";
+  return text(out, 2) + "\n";
 }
 
 // PrairieLearn keeps results under 1 MB: images go on failed tests, shrunk to share a budget.
@@ -224,7 +230,7 @@ std::string prairielearn(const GradeResult& r) {
               {"tests", tests}};
   if (!r.error.empty()) out["format_errors"] = Json::array({"grader error: " + r.error});
   else if (!any_image) out["format_errors"] = format_errors;
-  return out.dump(2) + "\n";
+  return text(out, 2) + "\n";
 }
 
 // Text for people first, then the formatted feedback line, then the score line last.
@@ -244,7 +250,7 @@ std::string autolab(const GradeResult& r) {
   Json semantic = {{"_presentation", "semantic"}, {"stages", {"Images"}}, {"Images", stage}};
   Json result = {{"scores", scores},
                  {"scoreboard", {score_number(r.error.empty() ? r.score : 0), score_number(r.max_score)}}};
-  return out + "\n" + semantic.dump() + "\n" + result.dump() + "\n";
+  return out + "\n" + text(semantic) + "\n" + text(result) + "\n";
 }
 
 std::string junit(const GradeResult& r) {
@@ -288,7 +294,7 @@ std::string json(const GradeResult& r) {
               {"render_version", kRenderVersion},
               {"tests", tests}};
   if (!r.error.empty()) out["error"] = r.error;
-  return out.dump(2) + "\n";
+  return text(out, 2) + "\n";
 }
 
 std::string html(const GradeResult& r) {
