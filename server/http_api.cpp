@@ -122,9 +122,19 @@ void HttpApi::harden() {
                    "Idempotent-Replayed");
   });
 
-  server_.set_exception_handler([](const Request&, Response& res, std::exception_ptr) {
+  server_.set_exception_handler([](const Request&, Response& res, std::exception_ptr ep) {
     // Never echo the exception text: it may carry internals.
     res.headers.clear();
+    try {
+      if (ep) std::rethrow_exception(ep);
+    } catch (const Unavailable&) {
+      // A farm node whose Redis does not answer: nothing is lost, try again shortly.
+      ApiError e = api_error(503, "redis_unavailable",
+                             "the farm's job store is unavailable; try again shortly");
+      e.retry_after = 2;
+      return send_error(res, e);
+    } catch (...) {
+    }
     send_error(res, 500, "internal_error", "internal server error");
   });
 

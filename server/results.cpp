@@ -87,6 +87,7 @@ void Service::on_finished(Job& job, RenderJob* render) {
 }
 
 std::shared_ptr<const std::string> Service::result_png(const JobRecord& job) {
+  if (farm_) return farm_->png(job.image_name);
   if (auto hit = cache_.get(job.image_name)) return hit;
   if (auto stored = blobs_.get(BlobKind::image, job.image_name)) {
     auto png = std::make_shared<const std::string>(std::move(*stored));
@@ -97,7 +98,7 @@ std::shared_ptr<const std::string> Service::result_png(const JobRecord& job) {
 }
 
 std::optional<Image> Service::current_image(const JobRecord& job) {
-  if (auto render = scheduler_->render_of(job.id)) return render->image();
+  if (auto render = farm_ ? nullptr : scheduler_->render_of(job.id)) return render->image();
   if (job.state == JobState::done) {
     auto png = result_png(job);
     if (!png) return std::nullopt;

@@ -20,7 +20,10 @@ void get_samples(Service& svc, const Request& req, Response& res) {
 
 void get_healthz(Service& svc, const Request& req, Response& res) {
   if (!check_query(req, res, "GET /healthz", {})) return;
-  send_json(res, svc.shutting_down() ? 503 : 200, svc.health());
+  Json health = svc.health();
+  const bool redis_down = health.contains("redis") && health["redis"]["status"] != "ok";
+  if (redis_down) res.set_header("Retry-After", "2");
+  send_json(res, svc.shutting_down() || redis_down ? 503 : 200, health);
 }
 
 void get_metrics(Service& svc, const Request& req, Response& res) {

@@ -47,6 +47,7 @@ Service::Service(Settings settings, Backends backends)
   // At most 4 jobs of a client render at once (more would only split its share further).
   scheduler_ = std::make_unique<Scheduler>(*queue_, "local", workers, 4, settings_.job_timeout,
                                            std::move(hooks));
+  if (!settings_.redis.empty()) farm_ = std::make_unique<FarmBackend>(settings_, workers);
   load_samples();
   restore();
   janitor_ = std::thread([this] {
@@ -62,9 +63,11 @@ Service::~Service() {
   stop_janitor_ = true;
   if (janitor_.joinable()) janitor_.join();
   scheduler_->stop();
+  if (farm_) farm_->stop();
 }
 
 ApiError Service::cancel(const std::string& id, const std::string& client) {
+  if (farm_) return farm_->cancel(id, client);
   auto job = jobs_->get(id);
   if (!job) return api_error(404, "not_found", "no job " + id);
   if (job->client != client)
@@ -94,6 +97,17 @@ std::optional<Slot> Service::take_slot(Slot::Kind kind) {
 std::optional<JobRecord> Service::await(const Slot&, const std::string& id,
                                         std::uint64_t since_version,
                                         std::chrono::steady_clock::time_point deadline) {
+  if (farm_) {
+    // The farm's record is polled: a unit takes far longer than a step.
+    for (;;) {
+      auto job = farm_->get(id);
+      if (!job || job->version > since_version || is_final(job->state) || stopped() ||
+          std::chrono::steady_clock::now() >= deadline)
+        return job;
+      std::this_thread::sleep_until(
+          std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(100)));
+    }
+  }
   // In short steps, so a shutdown is noticed without a wake-up from the store.
   for (;;) {
     auto step = std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(250));
@@ -114,11 +128,18 @@ std::optional<JobRecord> Service::await_final(const Slot& slot, const std::strin
 }
 
 nlohmann::json Service::health() const {
-  return {{"status", shutting_down_ ? "shutting_down" : "ok"},
-          {"queue_depth", queue_->depth()},
-          {"running", queue_->active()},
-          {"queue_capacity", settings_.queue_capacity},
-          {"workers", scheduler_->workers()}};
+  nlohmann::json h = {{"status", shutting_down_ ? "shutting_down" : "ok"},
+                      {"queue_depth", queue_->depth()},
+                      {"running", queue_->active()},
+                      {"queue_capacity", settings_.queue_capacity},
+                      {"workers", scheduler_->workers()}};
+  if (farm_) {
+    nlohmann::json redis;
+    const bool reachable = farm_->healthy(redis);
+    h["redis"] = redis;
+    if (!reachable && !shutting_down_) h["status"] = "redis_unreachable";
+  }
+  return h;
 }
 
 std::string Service::metrics_text() const {
@@ -130,13 +151,14 @@ std::string Service::metrics_text() const {
   g.event_streams = streams_.load();
   g.waiting_requests = waiters_.load();
   g.cache_bytes = static_cast<long>(cache_.bytes());
-  return metrics_.render_text(g);
+  return metrics_.render_text(g) + (farm_ ? farm_->metrics_text() : std::string());
 }
 
 void Service::shutdown() {
   if (shutting_down_.exchange(true)) return;
   scheduler_->drain(std::chrono::milliseconds(static_cast<long>(settings_.shutdown_grace * 1000)));
   scheduler_->stop();
+  if (farm_) farm_->stop();  // its units go back to the farm at once
   stopped_ = true;  // waiting requests and event streams see it within their next step
 }
 

@@ -22,6 +22,7 @@
 
 #include "api_error.h"
 #include "blob_store.h"
+#include "farm_backend.h"
 #include "image_cache.h"
 #include "job.h"
 #include "job_store.h"
@@ -105,12 +106,19 @@ class Service {
   Submitted submit(const std::string& scene_text, const Params& options, const std::string& client,
                    const TextureFiles& textures = {}, const SubmitHow& how = {});
 
-  std::optional<JobRecord> find(const std::string& id) const { return jobs_->get(id); }
+  // In a farm (--redis) these read Redis, and throw Unavailable when it does not answer.
+  std::optional<JobRecord> find(const std::string& id) const {
+    return farm_ ? farm_->get(id) : jobs_->get(id);
+  }
   std::vector<JobRecord> jobs_of(const std::string& client, size_t limit) const {
-    return jobs_->list_by_client(client, limit);
+    return farm_ ? farm_->list(client, limit) : jobs_->list_by_client(client, limit);
   }
   ApiError cancel(const std::string& id, const std::string& client);
-  int queue_position(const std::string& id) const { return queue_->position(id); }
+  int queue_position(const std::string& id) const {
+    return farm_ ? farm_->queue_position(id) : queue_->position(id);
+  }
+  // This process's farm node; null without --redis.
+  FarmBackend* farm() const { return farm_.get(); }
   nlohmann::json status(const JobRecord& job) const {
     return job_status(job, queue_position(job.id));
   }
@@ -177,6 +185,7 @@ class Service {
   ImageCache cache_;
   Metrics metrics_;
   std::unique_ptr<Scheduler> scheduler_;
+  std::unique_ptr<FarmBackend> farm_;  // --redis: jobs, queue and results in the farm
 
   mutable std::mutex mu_;
   // How many kept (or being submitted) jobs name each image: expiry deletes an image only when

@@ -106,6 +106,24 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
         return "must be an origin such as https://grader.example.edu or http://localhost:3000 "
                "(a scheme and a host, an optional port, no path)";
       });
+  add("--redis", s.redis,
+      "join the farm at this Redis: redis://[user@]host:port[/db] or unix:///path "
+      "(no password in it)");
+  // Its own environment variable, RAYFARM_REDIS_PASSWORD, holds the password itself.
+  app.add_option("--redis-password-file", s.redis_password_file,
+                 "file holding the Redis password (or set RAYFARM_REDIS_PASSWORD)")
+      ->envname("RAYFARM_REDIS_PASSWORD_FILE");
+  add("--node-id", s.node_id, "this node's name in the farm (default host:port:pid:start-ms)");
+  add("--redis-prefix", s.redis_prefix, "prefix of the farm's Redis keys");
+  add("--heartbeat-ms", s.heartbeat_ms, "how often a farm node renews its units' leases")
+      ->check(CLI::Range(10, 600000));
+  add("--lease-ms", s.lease_ms, "a unit not renewed this long goes to another node")
+      ->check(CLI::Range(50, 3600000));
+  add("--unit-work", s.unit_work, "ray paths one unit of a farm job should take")
+      ->check(CLI::Range(1.0, 1e18));
+  add("--distribute-work", s.distribute_work,
+      "a farm job of at most this many ray paths is rendered as one unit")
+      ->check(CLI::Range(0.0, 1e18));
   bool quiet = false;
   app.add_flag("--no-access-log", quiet, "do not log each request")->envname("RAYFARM_NO_ACCESS_LOG");
   try {
@@ -121,6 +139,12 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
     return std::nullopt;
   }
   s.access_log = !quiet;
+  if (!s.redis.empty() && s.lease_ms < 2 * s.heartbeat_ms) {
+    std::fprintf(stderr, "rayfarmd: --lease-ms (%d) must be at least twice --heartbeat-ms (%d)\n",
+                 s.lease_ms, s.heartbeat_ms);
+    exit_code = 2;
+    return std::nullopt;
+  }
   // Browsers send an origin in lower case.
   for (char& c : s.cors_origin) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   RenderOptions resolved;

@@ -47,6 +47,17 @@ struct Settings {
   // grader hosted elsewhere); empty: no cross-origin access.
   std::string cors_origin;
   bool access_log = true;
+
+  // The farm (docs/deployment.md#a-farm-of-several-machines): empty `redis` is the single
+  // process; otherwise this process is one node of the farm that Redis holds together.
+  std::string redis;                // redis://[user@]host:port[/db] or unix:///path
+  std::string redis_password_file;  // else RAYFARM_REDIS_PASSWORD; never on the command line
+  std::string node_id;              // empty: host:port:pid:start-ms
+  std::string redis_prefix = "rf:";
+  int heartbeat_ms = 1000;
+  int lease_ms = 10000;
+  double unit_work = 4e6;        // ray paths (pixels x spp x (max_depth + 1)) a unit should take
+  double distribute_work = 2e7;  // a job of at most this many ray paths is one unit
 };
 
 // Parses flags (each also read from RAYFARM_<NAME>). Returns nullopt after printing help or

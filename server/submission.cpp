@@ -64,7 +64,8 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     e.retry_after = 5;
     return {std::nullopt, e};
   }
-  if (how.idempotency_key.empty()) return submit_new(scene_text, params, client, textures, how, "");
+  // The farm's submit keeps the keys, farm-wide.
+  if (how.idempotency_key.empty() || farm_) return submit_new(scene_text, params, client, textures, how, "");
   // draft-ietf-httpapi-idempotency-key-header: the same key and request give the first
   // answer's job; the key with another request is 422; a retry while the first is still
   // being accepted is 409.
@@ -103,7 +104,8 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
 Submitted Service::submit_new(const std::string& scene_text, const Params& params,
                               const std::string& client, const TextureFiles& textures,
                               const SubmitHow& how, const std::string& digest) {
-  if (queue_->depth() + queue_->active() >=
+  // A farm counts both limits farm-wide, in its submit.
+  if (!farm_ && queue_->depth() + queue_->active() >=
       static_cast<size_t>(settings_.queue_capacity)) {
     metrics_.rejected("queue_full");
     ApiError e = api_error(429, "queue_full",
@@ -112,7 +114,7 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
     e.retry_after = 2;
     return {std::nullopt, e};
   }
-  {
+  if (!farm_) {
     // The pool holds exactly the unfinished jobs: counting there costs the client's own
     // jobs, not every job kept for reading back (thousands on a busy day).
     const auto mine = static_cast<long long>(queue_->jobs_of(client));
@@ -198,6 +200,20 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
   const std::vector<std::string> hashes = texture_hashes(*scene, textures);
   if (options.time_limit == 0) job.cache_key = content_key(loaded.desc, options, hashes);
   job.image_name = job.cache_key.empty() ? job.id : job.cache_key;
+  if (farm_) {
+    if (!hashes.empty())
+      return {std::nullopt,
+              api_error(422, "farm_unsupported",
+                        "this server is a node of a farm, which cannot render scenes with "
+                        "texture files yet; render it without textures")};
+    const int named_limit = roster_.max_jobs_of(client);
+    auto out = farm_->submit(job, scene_text,
+                             named_limit > 0 ? named_limit : settings_.max_jobs_per_client);
+    if (out.error.status == 429)
+      metrics_.rejected(out.error.code == "queue_full" ? "queue_full" : "client_limit");
+    if (out.job && out.job->cache_hit) metrics_.cache(true);
+    return {out.job, out.error, out.replayed};
+  }
 
   bool hit;
   {

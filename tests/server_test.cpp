@@ -2263,6 +2263,46 @@ TEST(ServerCors, TheOriginIsAFlagAndAnEnvironmentVariableAndMustBeExact) {
   }
 }
 
+// The farm's settings (docs/deployment.md#a-farm-of-several-machines): without --redis the
+// process is the single one; the password never comes from the command line or the URL.
+TEST(ServerFarmSettings, RedisOptionsAreParsedCheckedAndRefusedWhereUnsafe) {
+  int code = 0;
+  auto s = parse_flags({"rayfarmd"}, code);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->redis, "");
+  EXPECT_EQ(s->redis_prefix, "rf:");
+  EXPECT_EQ(s->heartbeat_ms, 1000);
+  EXPECT_EQ(s->lease_ms, 10000);
+  ::setenv("RAYFARM_REDIS", "unix:///tmp/r.sock", 1);
+  s = parse_flags({"rayfarmd", "--node-id", "n1", "--heartbeat-ms", "100", "--lease-ms", "600"}, code);
+  ::unsetenv("RAYFARM_REDIS");
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->redis, "unix:///tmp/r.sock");
+  EXPECT_EQ(s->node_id, "n1");
+  EXPECT_EQ(s->lease_ms, 600);
+  // A lease shorter than two heartbeats would reclaim units of live nodes.
+  code = 0;
+  EXPECT_FALSE(parse_flags({"rayfarmd", "--redis", "unix:///tmp/r.sock", "--heartbeat-ms", "400",
+                      "--lease-ms", "600"},
+                     code));
+  EXPECT_EQ(code, 2);
+  // No --redis-password: the password is not an option at all.
+  code = 0;
+  EXPECT_FALSE(parse_flags({"rayfarmd", "--redis-password", "secret"}, code));
+  EXPECT_EQ(code, 2);
+  // A password in the URL, or a URL of another scheme, stops the start with a clear message.
+  for (const char* bad : {"redis://u:secret@host:6379", "http://host:6379", "unix://relative"}) {
+    Settings st = test_settings();
+    st.redis = bad;
+    try {
+      Service service(st);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("--redis"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // ---- cpp-httplib 0.11.4 weaknesses, over a raw socket ------------------------------------
 
 // A burst of connections (a class submitting at once) is queued by the kernel, not dropped:

@@ -129,8 +129,15 @@ void FarmNode::abandon() {
   {
     std::lock_guard lock(mu_);
     for (auto& [entry, held] : held_) held.stop->store(true);
+    for (auto& [entry, job] : rendering_) job->cancel();
   }
   stop();
+}
+
+void FarmNode::halt(const std::string& entry) {
+  std::lock_guard lock(mu_);
+  if (auto it = held_.find(entry); it != held_.end()) it->second.stop->store(true);
+  if (auto it = rendering_.find(entry); it != rendering_.end()) it->second->cancel();
 }
 
 size_t FarmNode::in_flight() const {
@@ -236,8 +243,18 @@ bool FarmNode::render_unit(FarmClient& fc, const Unit& unit, const std::atomic<b
     (void)fc.fail(unit, error.empty() ? "the unit could not start" : error);
     return true;  // answered (failed), not to be released
   }
+  {
+    std::lock_guard lock(mu_);
+    rendering_[unit.entry] = job.get();
+  }
+  // A cancel or a lost lease stops the render mid-tile (halt()); the flag covers a stop that
+  // came before the render was registered.
   while (job->run_step() != RenderJob::Step::done)
     if (stop.load(std::memory_order_relaxed)) job->cancel();
+  {
+    std::lock_guard lock(mu_);
+    rendering_.erase(unit.entry);
+  }
   if (job->canceled()) return false;
   const std::string payload = encode_unit(unit_result(*job));
   auto status = fc.complete(unit, payload);
@@ -299,7 +316,7 @@ void FarmNode::keep_alive() {
       if (auto states = connection.pipeline(cmds)) {
         for (size_t i = 0; i < held.size(); ++i) {
           const auto& r = (*states)[i];
-          if (r && (r->is_nil() || r->str() != "running")) held[i].second.stop->store(true);
+          if (r && (r->is_nil() || r->str() != "running")) halt(held[i].first);
         }
       }
     }
@@ -309,9 +326,7 @@ void FarmNode::keep_alive() {
     for (const auto& [entry, h] : held) entries.push_back(entry);
     const std::string info = nlohmann::json({{"workers", config_.workers}}).dump();
     if (auto lost = fc.heartbeat(info, config_.heartbeat * 3, entries)) {
-      std::lock_guard lock(mu_);
-      for (const std::string& entry : *lost)
-        if (auto it = held_.find(entry); it != held_.end()) it->second.stop->store(true);
+      for (const std::string& entry : *lost) halt(entry);
     }
     // The janitor: one node at a time, and only a lease after this node (re)connected, since
     // idle times include an outage of Redis.

@@ -112,6 +112,8 @@ class FarmNode {
     std::shared_ptr<const PreparedRender> render;  // built once for all of the job's units
   };
 
+  // Stops the unit of `entry`: its flag, and its render at once (mid-tile), when it runs.
+  void halt(const std::string& entry);
   void work(int index);
   void keep_alive();
   bool render_unit(FarmClient& fc, const Unit& unit, const std::atomic<bool>& stop);
@@ -127,6 +129,7 @@ class FarmNode {
 
   mutable std::mutex mu_;
   std::map<std::string, Held> held_;  // by stream entry
+  std::map<std::string, RenderJob*> rendering_;  // the render of each held entry, while it runs
   // Prepared jobs by id (a few: the jobs being rendered now and recently).
   std::map<std::string, std::shared_ptr<const Prepared>> prepared_;
   std::vector<std::string> prepared_order_;

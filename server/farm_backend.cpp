@@ -1,0 +1,386 @@
+// The farm side of Service (farm_backend.h): job records, submissions, cancels and images in
+// Redis through the rayfarm1 Functions, and this node's FarmNode rendering units.
+#include "farm_backend.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+
+#include "farm_node.h"
+#include "rayfarm/render.h"
+#include "rayfarm/sha256.h"
+
+namespace rayfarm::server {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+long long number(const farm::JobFields& f, const char* name) {
+  auto it = f.find(name);
+  if (it == f.end() || it->second.empty()) return 0;
+  char* end = nullptr;
+  const long long v = std::strtoll(it->second.c_str(), &end, 10);
+  return end && *end == '\0' ? v : 0;
+}
+
+std::string text(const farm::JobFields& f, const char* name) {
+  auto it = f.find(name);
+  return it == f.end() ? std::string() : it->second;
+}
+
+// A job's state in the farm (queued, running, assembling, done, failed, canceled) as the
+// service's; assembling is the end of running.
+std::pair<JobState, int> state_of(const std::string& s) {
+  if (s == "running") return {JobState::running, 1};
+  if (s == "assembling") return {JobState::running, 2};
+  if (s == "done") return {JobState::done, 3};
+  if (s == "failed") return {JobState::failed, 4};
+  if (s == "canceled") return {JobState::canceled, 5};
+  return {JobState::queued, 0};
+}
+
+std::string label_value(const std::string& v) {
+  std::string out;
+  for (char c : v) {
+    if (c == '\\' || c == '"') out += '\\';
+    if (c == '\n') {
+      out += "\\n";
+      continue;
+    }
+    out += c;
+  }
+  return out;
+}
+
+std::string default_node_id(const Settings& s) {
+  char host[256] = {};
+  if (gethostname(host, sizeof host - 1) != 0) std::snprintf(host, sizeof host, "%s", s.host.c_str());
+  const auto start = std::chrono::duration_cast<milliseconds>(
+                         std::chrono::system_clock::now().time_since_epoch())
+                         .count();
+  return std::string(host) + ":" + std::to_string(s.port) + ":" + std::to_string(getpid()) + ":" +
+         std::to_string(start);
+}
+
+ApiError unavailable(const std::string& why) {
+  ApiError e = api_error(503, "redis_unavailable", "the farm's Redis is unavailable: " + why);
+  e.retry_after = 2;
+  return e;
+}
+
+}  // namespace
+
+struct FarmBackend::Impl {
+  Settings settings;
+  farm::FarmConfig config;
+  std::shared_ptr<farm::FarmSetup> setup;
+  std::unique_ptr<farm::Pool> pool;
+  std::unique_ptr<farm::FarmNode> node;
+  std::string url;
+  std::atomic<std::uint64_t> calls{0}, micros{0};
+
+  // Runs `f` with a farm client over a pooled connection; throws Unavailable when there is
+  // none, or when the result is an error.
+  template <class F>
+  auto call(F&& f) {
+    auto lease = pool->acquire(milliseconds(2000));
+    if (!lease) throw Unavailable(lease.error().message);
+    farm::Connection& c = **lease;
+    if (!c.connected())
+      if (auto st = c.ensure_connected(); !st) throw Unavailable(st.error().message);
+    farm::FarmClient fc(c, config);
+    const auto t0 = Clock::now();
+    auto r = f(fc);
+    calls += 1;
+    micros += std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - t0).count();
+    if (!r) {
+      const farm::Error& e = r.error();
+      throw Unavailable(e.kind == farm::ErrorKind::Oom ? "Redis is out of memory"
+                                                       : std::string(farm::to_string(e.kind)) +
+                                                             ": " + e.message);
+    }
+    return std::move(*r);
+  }
+
+  JobRecord record(const std::string& id, const farm::JobFields& f) const {
+    JobRecord r;
+    r.id = id;
+    r.client = text(f, "client");
+    auto [state, rank] = state_of(text(f, "state"));
+    r.state = state;
+    r.created_ms = number(f, "created_ms");
+    r.started_ms = number(f, "started_ms");
+    r.finished_ms = number(f, "finished_ms");
+    r.options.priority = static_cast<Priority>(std::clamp<long long>(number(f, "prio"), 0, 2));
+    std::string why;
+    if (auto job = farm::FarmJob::from_json(text(f, "opts"), &why)) {
+      for (const auto& [name, value] : job->options) (void)apply_option(r.options, name, value);
+      r.width = job->width;
+      r.height = job->height;
+      r.image_name = job->result;
+    }
+    r.options.priority = static_cast<Priority>(std::clamp<long long>(number(f, "prio"), 0, 2));
+    if (!text(f, "result").empty()) r.image_name = text(f, "result");
+    r.cache_key = r.image_name == id ? "" : r.image_name;
+    r.cache_hit = text(f, "cache") == "hit";
+    r.error = text(f, "error");
+    if (!r.error.empty()) r.error_code = "render_failed";
+    const long long units = std::max(1LL, number(f, "units")), done = number(f, "done");
+    RenderStats& st = r.stats;
+    st.spp_target = 1;
+    st.tiles_per_pass = static_cast<int>(units);
+    st.tiles_done = static_cast<int>(std::min(done, units));
+    st.primary_rays = static_cast<std::uint64_t>(number(f, "primary_rays"));
+    st.shadow_rays = static_cast<std::uint64_t>(number(f, "shadow_rays"));
+    st.reflection_rays = static_cast<std::uint64_t>(number(f, "reflection_rays"));
+    if (state == JobState::done) {
+      st.finished = true;
+      st.spp_target = st.spp_done = r.options.spp;
+      st.stop_reason = "spp";
+      if (!text(f, "error_estimate").empty()) st.error_estimate = std::atof(text(f, "error_estimate").c_str());
+      if (r.finished_ms > r.started_ms && r.started_ms > 0)
+        st.render_ms = static_cast<double>(r.finished_ms - r.started_ms);
+    }
+    // Grows with every unit done and every change of state: what watchers compare.
+    r.version = 1 + static_cast<std::uint64_t>(done) * 8 + static_cast<std::uint64_t>(rank);
+    return r;
+  }
+
+  std::optional<JobRecord> get(const std::string& id) {
+    auto fields = call([&](farm::FarmClient& fc) { return fc.job(id); });
+    if (!fields || fields->empty()) return std::nullopt;
+    return record(id, *fields);
+  }
+};
+
+FarmBackend::FarmBackend(const Settings& s, int workers) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.settings = s;
+  auto url = farm::parse_redis_url(s.redis);
+  if (!url) throw std::runtime_error("--redis: " + url.error().message);
+  std::optional<std::string> file;
+  if (!s.redis_password_file.empty()) file = s.redis_password_file;
+  auto password = farm::load_redis_password(file, std::getenv("RAYFARM_REDIS_PASSWORD"));
+  if (!password) throw std::runtime_error(password.error().message);
+  m.url = url->to_string();
+  farm::ConnectOptions base;
+  base.url = *url;
+  base.password = *password;
+  base.command_timeout = milliseconds(std::max(2000, 2 * s.lease_ms));
+  m.config.prefix = s.redis_prefix;
+  m.config.node = s.node_id.empty() ? default_node_id(s) : s.node_id;
+  m.config.build = "rayfarmd render " + std::to_string(kRenderVersion);
+  m.config.feed_target = std::max(8, 2 * workers);
+  m.config.block = milliseconds(std::clamp(s.heartbeat_ms, 50, 1000));
+  m.setup = std::make_shared<farm::FarmSetup>(m.config);
+  m.pool = std::make_unique<farm::Pool>(farm::farm_connect_options(base, m.setup), 16);
+  farm::NodeConfig nc;
+  nc.connect = base;
+  nc.farm = m.config;
+  nc.workers = workers;
+  nc.heartbeat = milliseconds(s.heartbeat_ms);
+  nc.lease = milliseconds(s.lease_ms);
+  nc.cancel_poll = milliseconds(std::min(100, s.heartbeat_ms));
+  nc.result_ttl = milliseconds(static_cast<long long>(s.result_ttl * 1000));
+  m.node = std::make_unique<farm::FarmNode>(nc);
+  m.node->start();
+}
+
+FarmBackend::~FarmBackend() { stop(); }
+
+void FarmBackend::stop() {
+  if (impl_->node) impl_->node->stop();
+}
+
+const std::string& FarmBackend::node() const { return impl_->config.node; }
+
+FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene_text,
+                                         int max_jobs_of_client) {
+  Impl& m = *impl_;
+  RenderOptions options = job.options;
+  options.width = job.width;
+  options.height = job.height;
+  const std::string result_key = job.cache_key.empty() ? job.id : job.cache_key;
+  const auto ttl = milliseconds(static_cast<long long>(m.settings.result_ttl * 1000));
+  try {
+    // Rendered already by some node, and still kept: answered from it, recorded as done so
+    // that every node can answer for the job. (With an Idempotency-Key the farm's submit
+    // decides, so a repeated key gives the first job.)
+    if (!job.cache_key.empty() && job.idempotency_key.empty()) {
+      const bool kept = m.call([&](farm::FarmClient& fc) -> farm::Result<bool> {
+        auto r = fc.connection().command({"EXISTS", fc.key("png:" + result_key)});
+        if (!r) return r.error();
+        return r->integer() == 1;
+      });
+      if (kept) {
+        farm::FarmJob f;
+        f.scene = sha256_hex(scene_text);
+        f.options = option_pairs(options);
+        f.width = job.width;
+        f.height = job.height;
+        f.tiles_per_unit = tile_count(job.width, job.height);
+        f.units = 1;
+        f.result = result_key;
+        farm::RecordRequest rr;
+        rr.job = job.id;
+        rr.client = job.client;
+        rr.priority = static_cast<farm::Priority>(static_cast<int>(job.options.priority));
+        rr.state = farm::EndState::Done;
+        rr.result = result_key;
+        rr.ttl = ttl;
+        rr.fields = {{"opts", f.to_json()}, {"cache", "hit"}};
+        m.call([&](farm::FarmClient& fc) { return fc.record(rr); });
+        return {m.get(job.id), {}, false};
+      }
+    }
+    farm::FarmSubmission s;
+    s.job = job.id;
+    s.client = job.client;
+    s.priority = static_cast<farm::Priority>(static_cast<int>(job.options.priority));
+    s.scene_text = scene_text;
+    s.options = options;
+    s.result_key = result_key;
+    const double work = static_cast<double>(job.width) * job.height * std::max(1, options.spp) *
+                        (options.effective_max_depth() + 1.0);
+    // A small job is one unit: splitting it costs more round trips than it saves.
+    s.unit_work = work <= m.settings.distribute_work ? work * 2 : m.settings.unit_work;
+    s.idempotency_key = job.idempotency_key;
+    s.max_active_per_client = max_jobs_of_client;
+    s.max_jobs = m.settings.queue_capacity;
+    s.ttl = ttl;
+    const farm::SubmitResult r =
+        m.call([&](farm::FarmClient& fc) { return farm::submit_job(fc, s); });
+    switch (r.status) {
+      case farm::SubmitStatus::Accepted: {
+        auto rec = m.get(job.id);
+        if (!rec) return {std::nullopt, unavailable("the job vanished after submission")};
+        return {rec, {}, false};
+      }
+      case farm::SubmitStatus::Exists: {
+        auto rec = m.get(r.job.empty() ? job.id : r.job);
+        if (!rec) return {std::nullopt, unavailable("the job of this Idempotency-Key expired")};
+        return {rec, {}, true};
+      }
+      case farm::SubmitStatus::ClientLimit: {
+        ApiError e = api_error(429, "too_many_jobs",
+                               "you have " + std::to_string(max_jobs_of_client) +
+                                   " jobs queued or running on the farm; wait for some to finish");
+        e.retry_after = 2;
+        return {std::nullopt, e};
+      }
+      case farm::SubmitStatus::Full: {
+        ApiError e = api_error(429, "queue_full",
+                               "the farm's queue is full (" +
+                                   std::to_string(m.settings.queue_capacity) +
+                                   " jobs); try again later");
+        e.retry_after = 2;
+        return {std::nullopt, e};
+      }
+    }
+    return {std::nullopt, unavailable("an unknown answer")};
+  } catch (const Unavailable& e) {
+    return {std::nullopt, unavailable(e.what())};
+  }
+}
+
+std::optional<JobRecord> FarmBackend::get(const std::string& id) { return impl_->get(id); }
+
+std::vector<JobRecord> FarmBackend::list(const std::string& client, size_t limit) {
+  Impl& m = *impl_;
+  std::vector<std::string> ids = m.call([&](farm::FarmClient& fc) -> farm::Result<std::vector<std::string>> {
+    auto r = fc.connection().command(
+        {"ZREVRANGE", fc.key("cjobs:" + client), "0", std::to_string(std::max<size_t>(limit, 1) - 1)});
+    if (!r) return r.error();
+    std::vector<std::string> out;
+    for (std::size_t i = 0; i < r->size(); ++i)
+      if (auto id = (*r)[i].string()) out.emplace_back(*id);
+    return out;
+  });
+  std::vector<JobRecord> jobs;
+  for (const std::string& id : ids)
+    if (auto rec = m.get(id); rec && rec->client == client) jobs.push_back(*rec);
+  return jobs;
+}
+
+ApiError FarmBackend::cancel(const std::string& id, const std::string& client) {
+  auto r = impl_->call([&](farm::FarmClient& fc) { return fc.cancel(id, client); });
+  switch (r.status) {
+    case farm::CancelStatus::Canceled:
+      return {};
+    case farm::CancelStatus::NotFound:
+      return api_error(404, "not_found", "no job " + id);
+    case farm::CancelStatus::Forbidden:
+      return api_error(403, "forbidden", "only the client that submitted a job can cancel it");
+    case farm::CancelStatus::AlreadyEnded:
+      if (r.state == "canceled") return {};
+      return api_error(409, "already_finished",
+                       "the job has already " +
+                           std::string(r.state == "done" ? "finished" : "failed"));
+  }
+  return {};
+}
+
+int FarmBackend::queue_position(const std::string& id) {
+  return impl_->call([&](farm::FarmClient& fc) -> farm::Result<int> {
+    auto r = fc.connection().command({"ZRANK", fc.key("queued"), id});
+    if (!r) return r.error();
+    return r->is_nil() ? 0 : static_cast<int>(r->integer()) + 1;
+  });
+}
+
+std::shared_ptr<const std::string> FarmBackend::png(const std::string& key) {
+  auto bytes = impl_->call([&](farm::FarmClient& fc) { return farm::job_png(fc, key); });
+  if (!bytes) return nullptr;
+  return std::make_shared<const std::string>(std::move(*bytes));
+}
+
+bool FarmBackend::healthy(nlohmann::json& details) {
+  Impl& m = *impl_;
+  details = {{"url", m.url}, {"node", m.config.node}, {"units_in_flight", m.node->in_flight()}};
+  try {
+    m.call([&](farm::FarmClient& fc) { return fc.connection().command({"PING"}); });
+    details["status"] = "ok";
+    return true;
+  } catch (const Unavailable& e) {
+    details["status"] = "unreachable";
+    details["error"] = e.what();
+    return false;
+  }
+}
+
+std::string FarmBackend::metrics_text() const {
+  const Impl& m = *impl_;
+  const farm::NodeCounters& c = m.node->counters();
+  std::string out;
+  auto counter = [&](const char* name, const char* help, double v, const char* type = "counter") {
+    out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " " + type + "\n" +
+           name + " " + std::to_string(v) + "\n";
+  };
+  out += "# HELP rayfarm_node_info This farm node.\n# TYPE rayfarm_node_info gauge\n";
+  out += "rayfarm_node_info{node=\"" + label_value(m.config.node) + "\"} 1\n";
+  counter("rayfarm_units_rendered_total", "Units of farm jobs this node rendered.",
+          static_cast<double>(c.units_rendered));
+  counter("rayfarm_units_reclaimed_total", "Units of dead or stalled nodes this node requeued.",
+          static_cast<double>(c.units_reclaimed));
+  counter("rayfarm_units_stopped_total", "Units this node stopped (canceled or lease lost).",
+          static_cast<double>(c.units_stopped));
+  counter("rayfarm_units_failed_total", "Units this node could not render.",
+          static_cast<double>(c.units_failed));
+  counter("rayfarm_jobs_assembled_total", "Farm jobs whose image this node put together.",
+          static_cast<double>(c.jobs_assembled));
+  counter("rayfarm_units_in_flight", "Units this node renders now.",
+          static_cast<double>(m.node->in_flight()), "gauge");
+  const double calls = static_cast<double>(c.redis_calls + m.calls);
+  const double secs = static_cast<double>(c.redis_micros + m.micros) / 1e6;
+  out += "# HELP rayfarm_redis_round_trip_seconds Round trips to Redis (workers and requests).\n"
+         "# TYPE rayfarm_redis_round_trip_seconds summary\n";
+  out += "rayfarm_redis_round_trip_seconds_sum " + std::to_string(secs) + "\n";
+  out += "rayfarm_redis_round_trip_seconds_count " + std::to_string(static_cast<std::uint64_t>(calls)) + "\n";
+  return out;
+}
+
+}  // namespace rayfarm::server

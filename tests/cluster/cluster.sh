@@ -1,0 +1,150 @@
+#!/usr/bin/env bash
+# A farm of three real rayfarmd processes around a private redis-server (unix socket, AOF, in a
+# temp dir): (a) a job submitted to node 1 finishes byte-identical to `rayfarm render` while
+# node 2 is killed with kill -9 holding units; (b) its status and image from every node;
+# (c) DELETE on node 3 stops a job running on nodes 1-2 within a second; (d) Redis down: 503
+# with Retry-After on POST /render and /healthz, and after a restart from the same AOF the farm
+# works again. Usage: cluster.sh BUILD_DIR. Exit 77 (skipped) without redis-server, unless
+# RAYFARM_REQUIRE_REDIS=1.
+set -euo pipefail
+build=$(cd "$1" && pwd)
+src=$(cd "$(dirname "$0")/../.." && pwd)
+cd "$src"
+if ! command -v redis-server >/dev/null || ! command -v redis-cli >/dev/null; then
+  [ "${RAYFARM_REQUIRE_REDIS:-0}" = 1 ] && { echo "redis-server missing and RAYFARM_REQUIRE_REDIS=1"; exit 1; }
+  echo "redis-server is not on PATH; skipped"; exit 77
+fi
+dir=$(mktemp -d /tmp/rfcluster.XXXXXX)
+sock=$dir/r.sock
+redis_pid=""
+pids=(); ports=()
+cleanup() {
+  for p in "${pids[@]}" $redis_pid; do [ -n "$p" ] && kill -9 "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  if [ "${keep:-0}" = 1 ]; then echo "logs in $dir"; else rm -rf "$dir"; fi
+}
+trap cleanup EXIT
+fail() { echo "cluster: FAIL: $*"; keep=1; for i in 1 2 3; do echo "--- node $i"; tail -5 "$dir/node$i.log" 2>/dev/null || true; done; exit 1; }
+rcli() { redis-cli -s "$sock" "$@"; }
+
+start_redis() {
+  redis-server --port 0 --unixsocket "$sock" --unixsocketperm 700 --dir "$dir" \
+    --appendonly yes --appendfsync everysec --save "" --daemonize no >>"$dir/redis.log" 2>&1 &
+  redis_pid=$!
+  for _ in $(seq 100); do rcli ping 2>/dev/null | grep -q PONG && return 0; sleep 0.05; done
+  fail "redis-server did not start"
+}
+
+# start_node N: node N on a free port, one worker, short leases.
+start_node() {
+  local n=$1 port=$((20000 + RANDOM % 20000))
+  "$build/server/rayfarmd" --host 127.0.0.1 --port "$port" --no-access-log --workers 1 \
+    --redis "unix://$sock" --node-id "node$n" --heartbeat-ms 100 --lease-ms 600 \
+    --unit-work 8e6 --distribute-work 1e6 >>"$dir/node$n.log" 2>&1 &
+  pids[$n]=$!; ports[$n]=$port
+  for _ in $(seq 100); do curl -sf "http://127.0.0.1:$port/healthz" >/dev/null && return 0; sleep 0.05; done
+  fail "node $n did not start"
+}
+url() { echo "http://127.0.0.1:${ports[$1]}$2"; }
+field() { python3 -c "import json,sys; d=json.load(sys.stdin); print(d$1)"; }
+state_on() { curl -s "$(url "$1" "/jobs/$2")" | field '["state"]'; }
+metric() { curl -s "$(url "$1" /metrics)" | awk -v m="$2" '$1 == m {print int($2)}'; }
+
+start_redis
+for n in 1 2 3; do start_node "$n"; done
+t0=$SECONDS
+
+# (a) a job of many units on node 1; node 2 killed while it holds some.
+q="width=320&height=240&spp=200&seed=7"
+id=$(curl -s --data-binary @scenes/cho.txt "$(url 1 "/render?$q")" | field '["id"]')
+units=$(rcli hget "rf:job:$id" units)
+[ "${units:-0}" -ge 8 ] || fail "expected a job of many units, got '${units:-none}'"
+# Node 2 is frozen (SIGSTOP) at a moment Redis says it holds units, then killed: the units it
+# held can only come back through the lease.
+held=0
+for _ in $(seq 400); do
+  if [ "$(rcli xpending rf:work render - + 100 node2 | grep -c '^node2$' || true)" -gt 0 ]; then
+    kill -STOP "${pids[2]}"
+    held=$(rcli xpending rf:work render - + 100 node2 | grep -c '^node2$' || true)
+    [ "$held" -gt 0 ] && break
+    kill -CONT "${pids[2]}"
+  fi
+  sleep 0.01
+done
+[ "$held" -gt 0 ] || fail "node 2 never held a unit"
+kill -9 "${pids[2]}"; wait "${pids[2]}" 2>/dev/null || true; pids[2]=""
+echo "cluster: (a) node 2 killed holding $held unit(s) of $units"
+for _ in $(seq 300); do
+  [ "$(state_on 1 "$id")" = done ] && break
+  sleep 0.1
+done
+[ "$(state_on 1 "$id")" = done ] || fail "the job did not finish: $(curl -s "$(url 1 "/jobs/$id")")"
+reclaimed=$(( $(metric 1 rayfarm_units_reclaimed_total) + $(metric 3 rayfarm_units_reclaimed_total) ))
+[ "$reclaimed" -ge 1 ] || fail "no unit was reclaimed"
+"$build/client/rayfarm" render scenes/cho.txt --width 320 --height 240 --spp 200 --seed 7 \
+  -o "$dir/local.png" -q
+curl -s -o "$dir/node1.png" "$(url 1 "/jobs/$id/image")"
+cmp "$dir/node1.png" "$dir/local.png" || fail "the farm's image differs from rayfarm render"
+echo "cluster: (a) done after the kill, $reclaimed unit(s) reclaimed, byte-identical to rayfarm render ($((SECONDS - t0)) s)"
+
+# (b) every route on every live node (node 2 comes back as a new process first).
+start_node 2
+for n in 1 2 3; do
+  [ "$(state_on "$n" "$id")" = done ] || fail "node $n does not report the job done"
+  [ "$(curl -s "$(url "$n" "/jobs/$id")" | field '["progress"]')" = 1.0 ] || fail "node $n: progress"
+  curl -s -o "$dir/node$n.png" "$(url "$n" "/jobs/$id/image")"
+  cmp "$dir/node$n.png" "$dir/local.png" || fail "node $n serves another image"
+  curl -s "$(url "$n" /jobs)" | grep -q "$id" || fail "node $n: GET /jobs lacks the job"
+done
+code=$(curl -s -o /dev/null -w '%{http_code}' "$(url 3 /jobs/0123456789abcdef0123456789abcdef)")
+[ "$code" = 404 ] || fail "an unknown job gave $code"
+# The same request again is answered from the farm's results, on another node.
+hit=$(curl -s --data-binary @scenes/cho.txt "$(url 3 "/render?$q&wait=1")" -o "$dir/hit.png" -w '%{http_code}')
+[ "$hit" = 200 ] && cmp -s "$dir/hit.png" "$dir/local.png" || fail "the cached answer on node 3 ($hit)"
+echo "cluster: (b) status, image and the job list from every node; a repeat answered from the cache"
+
+# (c) DELETE on node 3 of a job rendering on nodes 1 and 2.
+long=$(curl -s --data-binary @scenes/cho.txt "$(url 1 "/render?width=640&height=480&spp=256&seed=3")" | field '["id"]')
+for _ in $(seq 100); do
+  a=$(metric 1 rayfarm_units_in_flight); b=$(metric 2 rayfarm_units_in_flight)
+  [ "$a" -ge 1 ] && [ "$b" -ge 1 ] && break
+  sleep 0.05
+done
+[ "$a" -ge 1 ] && [ "$b" -ge 1 ] || fail "the long job did not run on nodes 1 and 2"
+before=$(date +%s%N)
+read -r code del_s < <(curl -s -o "$dir/del.json" -w '%{http_code} %{time_total}\n' -X DELETE "$(url 3 "/jobs/$long")")
+[ "$code" = 200 ] && [ "$(field '["state"]' <"$dir/del.json")" = canceled ] || fail "DELETE on node 3: $code $(cat "$dir/del.json")"
+# Units are rendering while Redis holds them unacknowledged: every node's ended within 1 s.
+stopped=0
+while [ $(( ($(date +%s%N) - before) / 1000000 )) -lt 5000 ]; do
+  if [ "$(rcli xpending rf:work render | head -1)" = 0 ]; then stopped=1; break; fi
+  sleep 0.02
+done
+took=$(( ($(date +%s%N) - before) / 1000000 ))
+[ "$stopped" = 1 ] && [ "$took" -lt "${CANCEL_MS:-1500}" ] || fail "units still held ${CANCEL_MS:-1500} ms after the cancel (the DELETE took $del_s s): $(rcli xpending rf:work render | head -1)"
+sleep 0.3
+[ "$(metric 1 rayfarm_units_in_flight)" = 0 ] && [ "$(metric 2 rayfarm_units_in_flight)" = 0 ] \
+  || fail "a node still renders the canceled job"
+echo "cluster: (c) canceled on node 3, every unit stopped within $took ms (the DELETE took $del_s s)"
+
+# (d) Redis down, then back from its AOF.
+kill -9 "$redis_pid"; wait "$redis_pid" 2>/dev/null || true; redis_pid=""
+headers=$(curl -s -D - -o /dev/null --data-binary @scenes/cho.txt "$(url 1 "/render?width=64&height=48")")
+echo "$headers" | head -1 | grep -q " 503" || fail "POST /render without Redis: $(echo "$headers" | head -1)"
+echo "$headers" | grep -qi '^Retry-After:' || fail "503 without Retry-After"
+code=$(curl -s -o /dev/null -w '%{http_code}' "$(url 2 /healthz)")
+[ "$code" = 503 ] || fail "/healthz without Redis gave $code"
+code=$(curl -s -o /dev/null -w '%{http_code}' "$(url 3 "/jobs/$id")")
+[ "$code" = 503 ] || fail "GET /jobs/ID without Redis gave $code"
+start_redis
+for _ in $(seq 100); do
+  [ "$(curl -s -o /dev/null -w '%{http_code}' "$(url 1 /healthz)")" = 200 ] && break
+  sleep 0.1
+done
+[ "$(curl -s -o /dev/null -w '%{http_code}' "$(url 1 /healthz)")" = 200 ] || fail "node 1 did not recover"
+[ "$(state_on 3 "$id")" = done ] || fail "the job from (a) was lost with the restart"
+new=$(curl -s --data-binary @scenes/cho.txt "$(url 2 "/render?width=96&height=64&spp=4&seed=5&wait=1")" -o "$dir/after.png" -w '%{http_code}')
+[ "$new" = 200 ] || fail "a render after the restart gave $new"
+for n in 1 2 3; do kill -0 "${pids[$n]}" || fail "node $n died"; done
+echo "cluster: (d) 503 + Retry-After while Redis was down; after its restart the farm renders again"
+echo "cluster: ok ($((SECONDS - t0)) s)"
