@@ -184,7 +184,7 @@ FarmBackend::FarmBackend(const Settings& s, int workers) : impl_(std::make_uniqu
   nc.workers = workers;
   nc.heartbeat = milliseconds(s.heartbeat_ms);
   nc.lease = milliseconds(s.lease_ms);
-  nc.cancel_poll = milliseconds(std::min(100, s.heartbeat_ms));
+  nc.cancel_poll = milliseconds(s.heartbeat_ms);  // a backstop: cancels come as messages
   nc.result_ttl = milliseconds(static_cast<long long>(s.result_ttl * 1000));
   m.node = std::make_unique<farm::FarmNode>(nc);
   m.node->start();

@@ -115,6 +115,7 @@ void FarmNode::start() {
   running_ = true;
   for (int i = 0; i < config_.workers; ++i) threads_.emplace_back([this, i] { work(i); });
   threads_.emplace_back([this] { keep_alive(); });
+  threads_.emplace_back([this] { listen(); });
 }
 
 void FarmNode::stop() {
@@ -138,6 +139,37 @@ void FarmNode::halt(const std::string& entry) {
   std::lock_guard lock(mu_);
   if (auto it = held_.find(entry); it != held_.end()) it->second.stop->store(true);
   if (auto it = rendering_.find(entry); it != rendering_.end()) it->second->cancel();
+}
+
+void FarmNode::halt_job(const std::string& job) {
+  std::vector<std::string> entries;
+  {
+    std::lock_guard lock(mu_);
+    for (const auto& [entry, held] : held_)
+      if (held.job == job) entries.push_back(entry);
+  }
+  for (const std::string& entry : entries) halt(entry);
+}
+
+void FarmNode::listen() {
+  Connection connection(farm_connect_options(config_.connect, setup_));
+  const std::string channel = config_.farm.prefix + "cancel";
+  bool subscribed = false;
+  while (running_ && !abandoned_) {
+    if (!subscribed) {
+      if (!connection.wait_connected(std::chrono::milliseconds(200))) continue;
+      subscribed = static_cast<bool>(connection.command({"SUBSCRIBE", channel}));
+      continue;  // (a cancel published meanwhile is the keep-alive poll's)
+    }
+    auto message = connection.next_message(std::chrono::milliseconds(200));
+    if (!message) {
+      subscribed = false;  // the connection is gone: reconnect with its backoff
+      continue;
+    }
+    // ["message", channel, job]
+    if (*message && (*message)->size() == 3 && (**message)[0].str() == "message")
+      halt_job(std::string((**message)[2].str()));
+  }
 }
 
 size_t FarmNode::in_flight() const {
@@ -292,7 +324,7 @@ void FarmNode::assemble(FarmClient& fc, const Prepared& p, const std::string& jo
 void FarmNode::keep_alive() {
   Connection connection(farm_connect_options(config_.connect, setup_));
   FarmClient fc(connection, config_.farm);
-  auto next_beat = Clock::now();
+  auto next_beat = Clock::now(), next_poll = Clock::now();
   std::optional<Clock::time_point> joined;  // no reclaim until a lease after (re)connecting
   std::uint64_t connects = 0;
   std::string cursor = "0-0";
@@ -309,8 +341,9 @@ void FarmNode::keep_alive() {
       std::lock_guard lock(mu_);
       held.assign(held_.begin(), held_.end());
     }
-    // Jobs canceled (or ended) elsewhere: their units stop.
-    if (!held.empty()) {
+    // Jobs canceled (or ended) elsewhere whose message listen() missed: their units stop.
+    if (!held.empty() && Clock::now() >= next_poll) {
+      next_poll = Clock::now() + config_.cancel_poll;
       std::vector<std::vector<std::string>> cmds;
       for (const auto& [entry, h] : held) cmds.push_back({"HGET", fc.key("job:" + h.job), "state"});
       if (auto states = connection.pipeline(cmds)) {

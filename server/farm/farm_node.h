@@ -65,7 +65,9 @@ struct NodeConfig {
   int workers = 1;
   std::chrono::milliseconds heartbeat{1000};
   std::chrono::milliseconds lease{10000};  // a unit not renewed this long is reclaimed
-  // How often the states of the jobs being rendered are read (a cancel stops them this soon).
+  // A cancel reaches the node at once on the farm's cancel channel; the states of the jobs
+  // being rendered are also read this often, for a message missed while the subscriber
+  // reconnected.
   std::chrono::milliseconds cancel_poll{200};
   std::chrono::milliseconds result_ttl{std::chrono::hours(1)};
 };
@@ -114,8 +116,12 @@ class FarmNode {
 
   // Stops the unit of `entry`: its flag, and its render at once (mid-tile), when it runs.
   void halt(const std::string& entry);
+  // Stops every held unit of `job`.
+  void halt_job(const std::string& job);
   void work(int index);
   void keep_alive();
+  // Subscribed to PREFIX cancel: halts the units of each job canceled anywhere.
+  void listen();
   bool render_unit(FarmClient& fc, const Unit& unit, const std::atomic<bool>& stop);
   void assemble(FarmClient& fc, const Prepared& prepared, const std::string& job);
   std::shared_ptr<const Prepared> prepare(FarmClient& fc, const Unit& unit, std::string* error);

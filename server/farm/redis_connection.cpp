@@ -1,6 +1,7 @@
 #include "redis_connection.h"
 
 #include <hiredis.h>
+#include <poll.h>
 #include <sys/time.h>
 
 #include <algorithm>
@@ -182,6 +183,26 @@ Result<Reply> Connection::command(std::span<const std::string_view> argv, millis
   if (ctx_)
     if (auto s = set_timeout(options_.command_timeout); !s) return s.error();
   return r;
+}
+
+Result<std::optional<Reply>> Connection::next_message(milliseconds wait) {
+  if (!ctx_) return Error{ErrorKind::ConnectionLost, "not subscribed: no connection"};
+  const auto deadline = Clock::now() + wait;
+  for (;;) {
+    void* raw = nullptr;
+    // A reply already read into hiredis's buffer comes first: poll() cannot see it.
+    if (redisGetReplyFromReader(ctx_, &raw) != REDIS_OK)
+      return context_error("reading a message from");
+    if (raw) return std::optional<Reply>(Reply(static_cast<redisReply*>(raw)));
+    const auto left = std::chrono::duration_cast<milliseconds>(deadline - Clock::now());
+    if (left.count() <= 0) return std::optional<Reply>();
+    pollfd p{ctx_->fd, POLLIN, 0};
+    const int ready = ::poll(&p, 1, static_cast<int>(left.count()));
+    if (ready < 0 && errno != EINTR) return context_error("waiting for a message from");
+    if (ready <= 0) continue;
+    errno = 0;
+    if (redisBufferRead(ctx_) != REDIS_OK) return context_error("reading a message from");
+  }
 }
 
 Result<std::vector<Result<Reply>>> Connection::pipeline(

@@ -22,6 +22,7 @@
 #include <functional>
 #include <initializer_list>
 #include <memory>
+#include <optional>
 #include <random>
 #include <span>
 #include <string>
@@ -82,6 +83,11 @@ class Connection {
   // Pipelining: every command is written, then every reply read, in one round trip. Error
   // replies are per command; a connection error fails the whole batch (outcomes unknown).
   Result<std::vector<Result<Reply>>> pipeline(const std::vector<std::vector<std::string>>& cmds);
+
+  // After SUBSCRIBE (sent with command()): the next message Redis pushes, waiting up to
+  // `wait`; an empty optional when none came. Unlike a socket timeout, an empty wait leaves
+  // the connection usable.
+  Result<std::optional<Reply>> next_message(std::chrono::milliseconds wait);
 
   const ConnectOptions& options() const { return options_; }
   // Successful connects so far (the first one included): a metric, and for the tests.

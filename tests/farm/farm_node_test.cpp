@@ -26,14 +26,16 @@ std::string read_text(const std::string& path) {
 
 class FarmNodes : public FarmTest {
  protected:
-  std::unique_ptr<FarmNode> start_node(const std::string& name, int workers = 1) {
+  std::unique_ptr<FarmNode> start_node(const std::string& name, int workers = 1,
+                                       std::chrono::milliseconds cancel_poll = 50ms,
+                                       std::chrono::milliseconds heartbeat = 100ms) {
     NodeConfig c;
     c.connect = server_->options();
     c.farm = config(name, 2);
     c.workers = workers;
-    c.heartbeat = 100ms;
-    c.lease = 500ms;
-    c.cancel_poll = 50ms;
+    c.heartbeat = heartbeat;
+    c.lease = 5 * heartbeat;
+    c.cancel_poll = cancel_poll;
     auto n = std::make_unique<FarmNode>(c);
     n->start();
     return n;
@@ -116,9 +118,12 @@ TEST_F(FarmNodes, ANodeThatDiesHoldingAUnitLosesNothing) {
 
 TEST_F(FarmNodes, ACancelFromAnyConnectionStopsEveryNodeAtOnce) {
   auto client = node("client");
-  const FarmSubmission s = submission("j3", "scenes/lab.txt", 400, 300, 64, 1024 * 64 * 9.0 * 4);
+  // Units of seconds each, so that only a stop mid-unit ends them this soon.
+  const FarmSubmission s = submission("j3", "scenes/lab.txt", 800, 600, 64, 1024 * 64 * 9.0 * 128);
   ASSERT_TRUE(submit_job(*client.farm, s));
-  auto a = start_node("a"), b = start_node("b");
+  // No polling of job states and a slow heartbeat: only the cancel channel can stop the
+  // units this soon.
+  auto a = start_node("a", 1, 1h, 3s), b = start_node("b", 1, 1h, 3s);
   const auto end = std::chrono::steady_clock::now() + 20s;
   while ((a->in_flight() == 0 || b->in_flight() == 0) && std::chrono::steady_clock::now() < end)
     std::this_thread::sleep_for(1ms);
@@ -135,6 +140,24 @@ TEST_F(FarmNodes, ACancelFromAnyConnectionStopsEveryNodeAtOnce) {
   EXPECT_LT(stopped_after, 500ms) << "running units stop within a fraction of a second";
   EXPECT_EQ(hget("job:j3", "state"), "canceled");
   EXPECT_EQ(integer({"EXISTS", prefix_ + "tiles:j3"}), 0);
+}
+
+TEST_F(FarmNodes, ACancelWhoseMessageWasMissedIsFoundByThePoll) {
+  auto client = node("client");
+  const FarmSubmission s = submission("j5", "scenes/lab.txt", 400, 300, 64, 1024 * 64 * 9.0 * 32);
+  ASSERT_TRUE(submit_job(*client.farm, s));
+  auto a = start_node("a", 1, 100ms, 3s);
+  const auto end = std::chrono::steady_clock::now() + 20s;
+  while (a->in_flight() == 0 && std::chrono::steady_clock::now() < end)
+    std::this_thread::sleep_for(1ms);
+  ASSERT_EQ(a->in_flight(), 1u);
+  // Ended behind the Functions' back: no message is published.
+  ASSERT_EQ(integer({"HSET", prefix_ + "job:j5", "state", "canceled"}), 0);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (a->in_flight() > 0 && std::chrono::steady_clock::now() - t0 < 5s)
+    std::this_thread::sleep_for(1ms);
+  EXPECT_EQ(a->in_flight(), 0u);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
 }
 
 TEST_F(FarmNodes, AJobWhoseSceneIsGoneFailsAfterThreeTriesWithTheReason) {
