@@ -4,8 +4,9 @@
 # node 2 is killed with kill -9 holding units; (b) its status and image from every node;
 # (c) DELETE on node 3 stops a job running on nodes 1-2 within half a second; (d) Redis down: 503
 # with Retry-After on POST /render and /healthz, and after a restart from the same AOF the farm
-# works again. Usage: cluster.sh BUILD_DIR. Exit 77 (skipped) without redis-server, unless
-# RAYFARM_REQUIRE_REDIS=1.
+# works again; (e) a small job sent after a big one finishes first; (f) a node frozen past its
+# lease: late results dropped; (g) Redis out of memory: 503. Usage: cluster.sh BUILD_DIR.
+# Exit 77 (skipped) without redis-server, unless RAYFARM_REQUIRE_REDIS=1.
 set -euo pipefail
 build=$(cd "$1" && pwd)
 src=$(cd "$(dirname "$0")/../.." && pwd)
@@ -47,7 +48,8 @@ start_node() {
 }
 url() { echo "http://127.0.0.1:${ports[$1]}$2"; }
 field() { python3 -c "import json,sys; d=json.load(sys.stdin); print(d$1)"; }
-state_on() { curl -s "$(url "$1" "/jobs/$2")" | field '["state"]'; }
+# (grep, not python3, whose start alone takes 0.3 s on a busy machine: states are polled)
+state_on() { curl -s "$(url "$1" "/jobs/$2")" | grep -o '"state": *"[a-z]*"' | head -1 | cut -d'"' -f4; }
 metric() { curl -s "$(url "$1" /metrics)" | awk -v m="$2" '$1 == m {print int($2)}'; }
 
 start_redis
@@ -128,6 +130,53 @@ sleep 0.3
 [ "$(metric 1 rayfarm_units_in_flight)" = 0 ] && [ "$(metric 2 rayfarm_units_in_flight)" = 0 ] \
   || fail "a node still renders the canceled job"
 echo "cluster: (c) canceled on node 3, every unit stopped within $took ms (the DELETE took $del_s s)"
+
+# (e) Fairness across nodes: a small job sent after a big one finishes first.
+big=$(curl -s --data-binary @scenes/cho.txt "$(url 1 "/render?width=640&height=480&spp=128&seed=11")" | field '["id"]')
+sleep 0.2
+small=$(curl -s --data-binary @scenes/cho.txt "$(url 3 "/render?width=64&height=48&seed=12")" | field '["id"]')
+for _ in $(seq 300); do
+  [ "$(state_on 2 "$small")" = done ] && break
+  sleep 0.05
+done
+[ "$(state_on 2 "$small")" = done ] || fail "the small job did not finish"
+[ "$(state_on 2 "$big")" != done ] || fail "the small job waited for the big one"
+echo "cluster: (e) a small job sent after a big one finished first ($(rcli hget "rf:job:$big" done)/$(rcli hget "rf:job:$big" units) units of the big one done)"
+
+# (f) A node frozen (SIGSTOP) past its lease: its units are rendered elsewhere; when it wakes,
+# its late results are dropped and the image stays the same bytes.
+for _ in $(seq 400); do
+  [ "$(rcli xpending rf:work render - + 100 node1 | grep -c '^node1$' || true)" -gt 0 ] && break
+  sleep 0.01
+done
+kill -STOP "${pids[1]}"
+for _ in $(seq 600); do
+  [ "$(state_on 3 "$big")" = done ] && break
+  sleep 0.1
+done
+[ "$(state_on 3 "$big")" = done ] || { kill -CONT "${pids[1]}"; fail "the big job did not finish without node 1"; }
+curl -s -o "$dir/big-before.png" "$(url 3 "/jobs/$big/image")"
+kill -CONT "${pids[1]}"
+sleep 1.5  # node 1 finishes its unit, is told the job is over, and goes on
+curl -s -o "$dir/big-after.png" "$(url 1 "/jobs/$big/image")"
+cmp -s "$dir/big-before.png" "$dir/big-after.png" || fail "a late result changed the image"
+"$build/client/rayfarm" render scenes/cho.txt --width 640 --height 480 --spp 128 --seed 11 \
+  -o "$dir/big-local.png" -q
+cmp -s "$dir/big-after.png" "$dir/big-local.png" || fail "the big job differs from rayfarm render"
+[ "$(curl -s -o /dev/null -w '%{http_code}' "$(url 1 /healthz)")" = 200 ] || fail "node 1 after SIGCONT"
+echo "cluster: (f) node 1 frozen past its lease: the job finished elsewhere, its late result was dropped"
+
+# (g) Redis out of memory: submissions get 503 + Retry-After, reads still answer, no crash.
+rcli config set maxmemory 1 >/dev/null
+headers=$(curl -s -D - -o "$dir/oom.json" --data-binary @scenes/cho.txt "$(url 2 "/render?width=64&height=48&seed=13")")
+echo "$headers" | head -1 | grep -q " 503" || fail "POST /render with Redis out of memory: $(echo "$headers" | head -1) $(cat "$dir/oom.json")"
+echo "$headers" | grep -qi '^Retry-After:' || fail "the out-of-memory 503 has no Retry-After"
+[ "$(state_on 2 "$big")" = done ] || fail "GET /jobs/ID with Redis out of memory"
+rcli config set maxmemory 0 >/dev/null
+code=$(curl -s -o /dev/null -w '%{http_code}' --data-binary @scenes/cho.txt "$(url 2 "/render?width=64&height=48&seed=13&wait=1")")
+[ "$code" = 200 ] || fail "a render once Redis had memory again gave $code"
+for n in 1 2 3; do kill -0 "${pids[$n]}" || fail "node $n died"; done
+echo "cluster: (g) Redis out of memory: 503 + Retry-After, reads answered, then renders again"
 
 # (d) Redis down, then back from its AOF.
 kill -9 "$redis_pid"; wait "$redis_pid" 2>/dev/null || true; redis_pid=""
