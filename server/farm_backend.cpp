@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <thread>
 
 #include "farm_node.h"
 #include "rayfarm/render.h"
@@ -127,8 +128,11 @@ struct FarmBackend::Impl {
     if (!text(f, "result").empty()) r.image_name = text(f, "result");
     r.cache_key = r.image_name == id ? "" : r.image_name;
     r.cache_hit = text(f, "cache") == "hit";
+    r.request_digest = text(f, "digest");
+    if (const std::string w = text(f, "warnings"); !w.empty())
+      r.warnings = warnings_from_json(nlohmann::json::parse(w, nullptr, false));
     r.error = text(f, "error");
-    if (!r.error.empty()) r.error_code = "render_failed";
+    if (!r.error.empty()) r.error_code = text(f, "code").empty() ? "render_failed" : text(f, "code");
     const long long units = std::max(1LL, number(f, "units")), done = number(f, "done");
     RenderStats& st = r.stats;
     st.spp_target = 1;
@@ -157,7 +161,9 @@ struct FarmBackend::Impl {
   }
 };
 
-FarmBackend::FarmBackend(const Settings& s, int workers) : impl_(std::make_unique<Impl>()) {
+FarmBackend::FarmBackend(const Settings& s, int workers,
+                         std::function<void(const std::string&)> on_cancel)
+    : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.settings = s;
   auto url = farm::parse_redis_url(s.redis);
@@ -186,6 +192,8 @@ FarmBackend::FarmBackend(const Settings& s, int workers) : impl_(std::make_uniqu
   nc.lease = milliseconds(s.lease_ms);
   nc.cancel_poll = milliseconds(s.heartbeat_ms);  // a backstop: cancels come as messages
   nc.result_ttl = milliseconds(static_cast<long long>(s.result_ttl * 1000));
+  nc.job_timeout = milliseconds(static_cast<long long>(s.job_timeout * 1000));
+  nc.on_cancel = std::move(on_cancel);
   m.node = std::make_unique<farm::FarmNode>(nc);
   m.node->start();
 }
@@ -199,7 +207,7 @@ void FarmBackend::stop() {
 const std::string& FarmBackend::node() const { return impl_->config.node; }
 
 FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene_text,
-                                         int max_jobs_of_client) {
+                                         int max_jobs_of_client, bool local) {
   Impl& m = *impl_;
   RenderOptions options = job.options;
   options.width = job.width;
@@ -244,11 +252,12 @@ FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene
     s.scene_text = scene_text;
     s.options = options;
     s.result_key = result_key;
-    const double work = static_cast<double>(job.width) * job.height * std::max(1, options.spp) *
-                        (options.effective_max_depth() + 1.0);
-    // A small job is one unit: splitting it costs more round trips than it saves.
-    s.unit_work = work <= m.settings.distribute_work ? work * 2 : m.settings.unit_work;
+    s.unit_work = m.settings.unit_work;
     s.idempotency_key = job.idempotency_key;
+    s.local = local;
+    if (local) s.fields.emplace_back("node", m.config.node);
+    if (!job.request_digest.empty()) s.fields.emplace_back("digest", job.request_digest);
+    if (!job.warnings.empty()) s.fields.emplace_back("warnings", json_text(warnings_json(job.warnings)));
     s.max_active_per_client = max_jobs_of_client;
     s.max_jobs = m.settings.queue_capacity;
     s.ttl = ttl;
@@ -256,6 +265,7 @@ FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene
         m.call([&](farm::FarmClient& fc) { return farm::submit_job(fc, s); });
     switch (r.status) {
       case farm::SubmitStatus::Accepted: {
+        if (local) return {job, {}, false, true};
         auto rec = m.get(job.id);
         if (!rec) return {std::nullopt, unavailable("the job vanished after submission")};
         return {rec, {}, false};
@@ -263,6 +273,12 @@ FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene
       case farm::SubmitStatus::Exists: {
         auto rec = m.get(r.job.empty() ? job.id : r.job);
         if (!rec) return {std::nullopt, unavailable("the job of this Idempotency-Key expired")};
+        if (!job.idempotency_key.empty() && rec->request_digest != job.request_digest)
+          return {std::nullopt,
+                  api_error(422, "idempotency_key_reused",
+                            "this Idempotency-Key was used for another request (job " +
+                                rec->id + "): the scene, options or textures differ; use a new "
+                                "key for a new request")};
         return {rec, {}, true};
       }
       case farm::SubmitStatus::ClientLimit: {
@@ -285,6 +301,45 @@ FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene
   } catch (const Unavailable& e) {
     return {std::nullopt, unavailable(e.what())};
   }
+}
+
+bool FarmBackend::finish_local(const JobRecord& job, JobState state, const std::string& code,
+                               const std::string& error, const std::string* png,
+                               const RenderStats& st) {
+  Impl& m = *impl_;
+  const auto ttl = milliseconds(static_cast<long long>(m.settings.result_ttl * 1000));
+  farm::RecordRequest rr;
+  rr.job = job.id;
+  rr.client = job.client;
+  rr.priority = static_cast<farm::Priority>(static_cast<int>(job.options.priority));
+  rr.state = state == JobState::done     ? farm::EndState::Done
+             : state == JobState::failed ? farm::EndState::Failed
+                                         : farm::EndState::Canceled;
+  rr.ttl = ttl;
+  if (state == JobState::done) rr.result = job.image_name;
+  rr.error = error;
+  if (!code.empty()) rr.fields.emplace_back("code", code);
+  rr.fields.emplace_back("primary_rays", std::to_string(st.primary_rays));
+  rr.fields.emplace_back("shadow_rays", std::to_string(st.shadow_rays));
+  rr.fields.emplace_back("reflection_rays", std::to_string(st.reflection_rays));
+  rr.fields.emplace_back("error_estimate", format_number(st.error_estimate));
+  // A render thread waits out a short outage here; a long one is the job limit's to end.
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    if (attempt > 0) std::this_thread::sleep_for(milliseconds(200 << attempt));
+    try {
+      if (png)
+        m.call([&](farm::FarmClient& fc) {
+          return fc.connection().command({"SET", fc.key("png:" + job.image_name), *png, "PX",
+                                          std::to_string(ttl.count())});
+        });
+      m.call([&](farm::FarmClient& fc) { return fc.record(rr); });
+      return true;
+    } catch (const Unavailable& e) {
+      std::fprintf(stderr, "rayfarmd: cannot record job %s in the farm yet: %s\n",
+                   job.id.c_str(), e.what());
+    }
+  }
+  return false;
 }
 
 std::optional<JobRecord> FarmBackend::get(const std::string& id) { return impl_->get(id); }

@@ -7,6 +7,7 @@
 // cancel, wait, image, health, metrics) and this class is the whole farm side of each.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -30,18 +31,30 @@ struct Unavailable : std::runtime_error {
 class FarmBackend {
  public:
   // Throws std::runtime_error on a bad URL or password file (the process does not start).
-  FarmBackend(const Settings& settings, int workers);
+  // `on_cancel` runs for every job canceled anywhere in the farm (this node's own jobs stop).
+  FarmBackend(const Settings& settings, int workers,
+              std::function<void(const std::string&)> on_cancel = {});
   ~FarmBackend();
 
   // Submits a checked job (its id, client, options, size and cache key set): answered from
   // the farm's results when its image is kept (recorded done), else queued for the farm.
   // Errors: 429 (client limit), 503 (full, Redis unavailable or out of memory).
+  // `local`: the job is rendered here alone (small, or with texture files only this node
+  // has); when `Outcome::local` comes back the caller queues it on its own scheduler and ends
+  // it with finish_local().
   struct Outcome {
     std::optional<JobRecord> job;
     ApiError error;
     bool replayed = false;
+    bool local = false;
   };
-  Outcome submit(JobRecord job, const std::string& scene_text, int max_jobs_of_client);
+  Outcome submit(JobRecord job, const std::string& scene_text, int max_jobs_of_client,
+                 bool local);
+  // Ends a local job in the farm: its image stored under its result key first, then the record
+  // (so a node that reads "done" finds the image). Retried briefly; false when Redis did not
+  // take it (the farm's job limit then ends the record).
+  bool finish_local(const JobRecord& job, JobState state, const std::string& code,
+                    const std::string& error, const std::string* png, const RenderStats& stats);
 
   // Throw Unavailable when Redis does not answer.
   std::optional<JobRecord> get(const std::string& id);

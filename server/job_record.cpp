@@ -34,16 +34,31 @@ long long now_ms() {
       .count();
 }
 
+nlohmann::json warnings_json(const std::vector<Diagnostic>& warnings) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const Diagnostic& d : warnings)
+    out.push_back({{"code", d.code},
+                   {"message", d.message},
+                   {"line", d.where.line},
+                   {"column", d.where.column},
+                   {"path", d.where.path}});
+  return out;
+}
+
+std::vector<Diagnostic> warnings_from_json(const nlohmann::json& j) {
+  std::vector<Diagnostic> out;
+  if (!j.is_array()) return out;
+  for (auto& w : j)
+    if (w.is_object())
+      out.push_back({Severity::warning, w.value("code", ""), w.value("message", ""),
+                     {w.value("line", 0), w.value("column", 0), w.value("path", "")}});
+  return out;
+}
+
 nlohmann::json to_json(const JobRecord& r) {
   nlohmann::json options = nlohmann::json::object();
   for (auto& [k, v] : option_pairs(r.options)) options[k] = v;
-  nlohmann::json warnings = nlohmann::json::array();
-  for (const Diagnostic& d : r.warnings)
-    warnings.push_back({{"code", d.code},
-                        {"message", d.message},
-                        {"line", d.where.line},
-                        {"column", d.where.column},
-                        {"path", d.where.path}});
+  nlohmann::json warnings = warnings_json(r.warnings);
   nlohmann::json record = {{"id", r.id},
                            {"client", r.client},
                            {"state", to_string(r.state)},
@@ -125,11 +140,7 @@ std::optional<JobRecord> record_from_json(const nlohmann::json& j) {
     r.idempotency_key = j.value("idempotency_key", "");
     r.request_digest = j.value("request_digest", "");
     r.textures = strings_of(j, "textures");
-    if (j.contains("warnings") && j["warnings"].is_array())
-      for (auto& w : j["warnings"])
-        if (w.is_object())
-          r.warnings.push_back({Severity::warning, w.value("code", ""), w.value("message", ""),
-                                {w.value("line", 0), w.value("column", 0), w.value("path", "")}});
+    if (j.contains("warnings")) r.warnings = warnings_from_json(j["warnings"]);
     if (j.contains("stats") && j["stats"].is_object()) {
       const auto& st = j["stats"];
       r.stats.primary_rays = st.value("primary", 0ULL);

@@ -63,6 +63,9 @@ struct JobRecord {
 // The record's one JSON form (the results directory's jobs/ID.json; a Redis hash later).
 // from_json reads records older builds wrote, and fails (nullopt) only without a valid id.
 nlohmann::json to_json(const JobRecord& r);
+// A record's warnings as stored (to_json's "warnings"), and back.
+nlohmann::json warnings_json(const std::vector<Diagnostic>& warnings);
+std::vector<Diagnostic> warnings_from_json(const nlohmann::json& j);
 std::optional<JobRecord> record_from_json(const nlohmann::json& j);
 
 // JSON text that never throws: user input that is not UTF-8 (a camera name in a query, a

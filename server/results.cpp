@@ -54,10 +54,11 @@ void Service::on_finished(Job& job, RenderJob* render) {
     });
     return;
   }
+  std::shared_ptr<const std::string> png;
   if (state == JobState::done) {
     try {
       auto bytes = encode_png(render->image());
-      auto png = std::make_shared<const std::string>(bytes.begin(), bytes.end());
+      png = std::make_shared<const std::string>(bytes.begin(), bytes.end());
       std::string name = before ? before->image_name : job.id;
       blobs_.put(BlobKind::image, name, *png);
       cache_.put(name, png);
@@ -67,7 +68,11 @@ void Service::on_finished(Job& job, RenderJob* render) {
       message = std::string("could not store the result: ") + ex.what();
     }
   }
-  std::vector<std::string> textures;
+  // A farm's job rendered here: the farm's record ends first, so whichever node a client
+  // asks next, once this node says done, finds the image.
+  if (farm_ && before)
+    farm_->finish_local(*before, state, code, message, state == JobState::done ? png.get() : nullptr,
+                        st);
   auto after = jobs_->transition(job.id, {JobState::queued, JobState::running}, [&](JobRecord& r) {
     r.state = state;
     r.error_code = code;
@@ -87,8 +92,8 @@ void Service::on_finished(Job& job, RenderJob* render) {
 }
 
 std::shared_ptr<const std::string> Service::result_png(const JobRecord& job) {
-  if (farm_) return farm_->png(job.image_name);
   if (auto hit = cache_.get(job.image_name)) return hit;
+  if (farm_) return farm_->png(job.image_name);
   if (auto stored = blobs_.get(BlobKind::image, job.image_name)) {
     auto png = std::make_shared<const std::string>(std::move(*stored));
     cache_.put(job.image_name, png);
@@ -98,7 +103,7 @@ std::shared_ptr<const std::string> Service::result_png(const JobRecord& job) {
 }
 
 std::optional<Image> Service::current_image(const JobRecord& job) {
-  if (auto render = farm_ ? nullptr : scheduler_->render_of(job.id)) return render->image();
+  if (auto render = scheduler_->render_of(job.id)) return render->image();
   if (job.state == JobState::done) {
     auto png = result_png(job);
     if (!png) return std::nullopt;

@@ -47,7 +47,9 @@ Service::Service(Settings settings, Backends backends)
   // At most 4 jobs of a client render at once (more would only split its share further).
   scheduler_ = std::make_unique<Scheduler>(*queue_, "local", workers, 4, settings_.job_timeout,
                                            std::move(hooks));
-  if (!settings_.redis.empty()) farm_ = std::make_unique<FarmBackend>(settings_, workers);
+  if (!settings_.redis.empty())
+    farm_ = std::make_unique<FarmBackend>(settings_, workers,
+                                          [this](const std::string& id) { cancel_local(id); });
   load_samples();
   restore();
   janitor_ = std::thread([this] {
@@ -66,8 +68,19 @@ Service::~Service() {
   if (farm_) farm_->stop();
 }
 
+void Service::cancel_local(const std::string& id) {
+  if (auto job = jobs_->get(id); !job || is_final(job->state)) return;
+  jobs_->request_cancel(id);
+  scheduler_->cancel(id);
+}
+
 ApiError Service::cancel(const std::string& id, const std::string& client) {
-  if (farm_) return farm_->cancel(id, client);
+  if (farm_) {
+    // Every node hears of it on the cancel channel; this one's own render stops at once.
+    ApiError e = farm_->cancel(id, client);
+    if (!e) cancel_local(id);
+    return e;
+  }
   auto job = jobs_->get(id);
   if (!job) return api_error(404, "not_found", "no job " + id);
   if (job->client != client)
@@ -97,8 +110,9 @@ std::optional<Slot> Service::take_slot(Slot::Kind kind) {
 std::optional<JobRecord> Service::await(const Slot&, const std::string& id,
                                         std::uint64_t since_version,
                                         std::chrono::steady_clock::time_point deadline) {
-  if (farm_) {
-    // The farm's record is polled: a unit takes far longer than a step.
+  if (farm_ && !jobs_->get(id)) {
+    // Another node's job, or one spread over the farm: its record is polled (a unit takes
+    // far longer than a step). A job rendered here is watched here, as without a farm.
     for (;;) {
       auto job = farm_->get(id);
       if (!job || job->version > since_version || is_final(job->state) || stopped() ||

@@ -107,15 +107,17 @@ class Service {
                    const TextureFiles& textures = {}, const SubmitHow& how = {});
 
   // In a farm (--redis) these read Redis, and throw Unavailable when it does not answer.
+  // A farm's job rendered on this node is read here: its record has the progress and warnings.
   std::optional<JobRecord> find(const std::string& id) const {
-    return farm_ ? farm_->get(id) : jobs_->get(id);
+    if (auto local = jobs_->get(id); local || !farm_) return local;
+    return farm_->get(id);
   }
   std::vector<JobRecord> jobs_of(const std::string& client, size_t limit) const {
     return farm_ ? farm_->list(client, limit) : jobs_->list_by_client(client, limit);
   }
   ApiError cancel(const std::string& id, const std::string& client);
   int queue_position(const std::string& id) const {
-    return farm_ ? farm_->queue_position(id) : queue_->position(id);
+    return farm_ && !jobs_->get(id) ? farm_->queue_position(id) : queue_->position(id);
   }
   // This process's farm node; null without --redis.
   FarmBackend* farm() const { return farm_.get(); }
@@ -173,6 +175,8 @@ class Service {
   void restore();
   bool on_started(Job& job, const RenderStats& stats);
   void on_finished(Job& job, RenderJob* render);
+  // Stops this node's render of a job (in a farm: a cancel heard from any node).
+  void cancel_local(const std::string& id);
   void load_samples();
   void release_image(const std::string& name);
 

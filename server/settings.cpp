@@ -122,7 +122,7 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   add("--unit-work", s.unit_work, "ray paths one unit of a farm job should take")
       ->check(CLI::Range(1.0, 1e18));
   add("--distribute-work", s.distribute_work,
-      "a farm job of at most this many ray paths is rendered as one unit")
+      "a farm job of at most this many ray paths is rendered on the node that took it")
       ->check(CLI::Range(0.0, 1e18));
   bool quiet = false;
   app.add_flag("--no-access-log", quiet, "do not log each request")->envname("RAYFARM_NO_ACCESS_LOG");

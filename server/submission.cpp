@@ -64,8 +64,11 @@ Submitted Service::submit(const std::string& scene_text, const Params& params,
     e.retry_after = 5;
     return {std::nullopt, e};
   }
-  // The farm's submit keeps the keys, farm-wide.
-  if (how.idempotency_key.empty() || farm_) return submit_new(scene_text, params, client, textures, how, "");
+  if (how.idempotency_key.empty()) return submit_new(scene_text, params, client, textures, how, "");
+  // The farm's submit keeps the keys farm-wide, with the digest in the job's record.
+  if (farm_)
+    return submit_new(scene_text, params, client, textures, how,
+                      request_digest(scene_text, params, textures));
   // draft-ietf-httpapi-idempotency-key-header: the same key and request give the first
   // answer's job; the key with another request is 422; a retry while the first is still
   // being accepted is 409.
@@ -201,26 +204,27 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
   if (options.time_limit == 0) job.cache_key = content_key(loaded.desc, options, hashes);
   job.image_name = job.cache_key.empty() ? job.id : job.cache_key;
   if (farm_) {
-    if (!hashes.empty())
-      return {std::nullopt,
-              api_error(422, "farm_unsupported",
-                        "this server is a node of a farm, which cannot render scenes with "
-                        "texture files yet; render it without textures")};
+    // A small job is rendered here (spreading it costs more round trips than it saves), and so
+    // is one with texture files: only this node has them. The farm still counts and lists it.
+    const double work = static_cast<double>(width) * height * std::max(1, options.spp) *
+                        (options.effective_max_depth() + 1.0);
+    const bool local = !hashes.empty() || work <= settings_.distribute_work;
     const int named_limit = roster_.max_jobs_of(client);
     auto out = farm_->submit(job, scene_text,
-                             named_limit > 0 ? named_limit : settings_.max_jobs_per_client);
+                             named_limit > 0 ? named_limit : settings_.max_jobs_per_client, local);
     if (out.error.status == 429)
       metrics_.rejected(out.error.code == "queue_full" ? "queue_full" : "client_limit");
     if (out.job && out.job->cache_hit) metrics_.cache(true);
-    return {out.job, out.error, out.replayed};
+    if (!out.local) return {out.job, out.error, out.replayed};
+    if (!job.cache_key.empty()) metrics_.cache(false);
   }
 
   bool hit;
   {
     // The image's reference is taken with the check, so expiry cannot delete an image this
-    // job is about to be answered from.
+    // job is about to be answered from. (A farm looked for the image in Redis already.)
     std::lock_guard lock(mu_);
-    hit = !job.cache_key.empty() &&
+    hit = !farm_ && !job.cache_key.empty() &&
           (cache_.get(job.cache_key) || blobs_.has(BlobKind::image, job.cache_key));
     ++image_refs_[job.image_name];
   }
@@ -233,7 +237,7 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
   } else {
     job.textures = hashes;  // the text and textures are kept for re-runs
   }
-  if (!job.cache_key.empty()) metrics_.cache(hit);
+  if (!job.cache_key.empty() && !farm_) metrics_.cache(hit);
   try {
     if (!hit) keep_textures(job.textures, *scene, textures);
     job = jobs_->create(std::move(job), scene_text);

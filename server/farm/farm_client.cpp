@@ -132,8 +132,13 @@ Result<SubmitResult> FarmClient::submit(const SubmitRequest& q) {
   const std::string max_jobs = std::to_string(q.max_jobs);
   const std::string target = std::to_string(config_.feed_target);
   const std::string ttl = ms(q.ttl), idem_ttl = ms(q.idempotency_ttl);
-  auto r = fcall("rf1_submit", {q.job, q.client, prio, units, max_active, max_jobs, target, ttl,
-                                q.idempotency_key, idem_ttl, q.opts});
+  std::vector<std::string_view> args{q.job, q.client, prio,   units, max_active, max_jobs,
+                                     target, ttl,     q.idempotency_key, idem_ttl, q.opts};
+  for (const auto& [k, v] : q.fields) {
+    args.push_back(k);
+    args.push_back(v);
+  }
+  auto r = fcall("rf1_submit", std::move(args));
   auto p = pair_reply<SubmitStatus>("rf1_submit", r,
                                     {{"accepted", SubmitStatus::Accepted},
                                      {"exists", SubmitStatus::Exists},
@@ -238,6 +243,17 @@ Result<ReclaimResult> FarmClient::reclaim(std::string_view janitor, std::chrono:
   if (r->size() != 3) return unexpected("rf1_reclaim", "shape");
   return ReclaimResult{std::string((*r)[0].str()), static_cast<int>((*r)[1].integer()),
                        static_cast<int>((*r)[2].integer())};
+}
+
+Result<SweepResult> FarmClient::sweep(std::string_view janitor, std::chrono::milliseconds lease,
+                                      std::chrono::milliseconds job_timeout, int count) {
+  const std::string l = ms(lease), t = ms(job_timeout), n = std::to_string(count);
+  auto r = fcall("rf1_sweep", {janitor, l, t, n});
+  if (!r) return r.error();
+  if (r->size() < 2) return unexpected("rf1_sweep", "shape");
+  SweepResult out{static_cast<int>((*r)[0].integer()), static_cast<int>((*r)[1].integer()), {}};
+  for (std::size_t i = 2; i < r->size(); ++i) out.assemble.emplace_back((*r)[i].str());
+  return out;
 }
 
 Result<CancelResult> FarmClient::cancel(std::string_view job, std::string_view client) {

@@ -72,6 +72,7 @@ struct SubmitRequest {
   int max_jobs = 0;  // queued + running jobs across the farm; 0: no limit
   std::chrono::milliseconds ttl{std::chrono::hours(1)};  // the record's life after it ends
   std::chrono::milliseconds idempotency_ttl{std::chrono::hours(24)};
+  std::vector<std::pair<std::string, std::string>> fields;  // more fields for the job record
 };
 enum class SubmitStatus { Accepted, Exists, ClientLimit, Full };
 struct SubmitResult {
@@ -96,6 +97,12 @@ struct ReclaimResult {
   std::string cursor;  // "0-0" when the sweep went round the whole backlog
   int requeued = 0;
   int failed = 0;  // jobs failed because a unit reached max_tries
+};
+// What rf1_sweep did with the jobs no unit lease covers.
+struct SweepResult {
+  int timed_out = 0;  // failed: running past the farm's job limit
+  int orphaned = 0;   // failed: a local job whose node is gone
+  std::vector<std::string> assemble;  // their assembler is gone: this janitor assembles them
 };
 enum class CancelStatus { Canceled, NotFound, Forbidden, AlreadyEnded };
 struct CancelResult {
@@ -154,6 +161,9 @@ class FarmClient {
   Result<std::vector<std::string>> held_entries(int count = 100);
   Result<ReclaimResult> reclaim(std::string_view janitor, std::chrono::milliseconds lease,
                                 std::string_view cursor = "0-0", int count = 64);
+  // `job_timeout` 0: no farm-wide limit.
+  Result<SweepResult> sweep(std::string_view janitor, std::chrono::milliseconds lease,
+                            std::chrono::milliseconds job_timeout, int count = 100);
   Result<CancelResult> cancel(std::string_view job, std::string_view client);
   Result<FinishResult> finish(std::string_view job, std::string_view result_key,
                               const Fields& fields = {});

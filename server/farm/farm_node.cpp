@@ -82,15 +82,18 @@ Result<SubmitResult> submit_job(FarmClient& client, const FarmSubmission& s) {
   f.result = s.result_key;
   // The scene first, so no node can take a unit whose scene is not there yet; it lives as long
   // as a job that names it may still be rendered.
-  const std::string key = client.key("scene:" + f.scene);
-  const std::string ttl = ms_text(s.ttl + std::chrono::hours(24));
-  auto stored = client.connection().command({"SET", key, s.scene_text, "PX", ttl});
-  if (!stored) return stored.error();
+  if (!s.local) {
+    const std::string key = client.key("scene:" + f.scene);
+    const std::string ttl = ms_text(s.ttl + std::chrono::hours(24));
+    auto stored = client.connection().command({"SET", key, s.scene_text, "PX", ttl});
+    if (!stored) return stored.error();
+  }
   SubmitRequest r;
   r.job = s.job;
   r.client = s.client;
   r.priority = s.priority;
-  r.units = f.units;
+  r.units = s.local ? 0 : f.units;
+  r.fields = s.fields;
   r.opts = f.to_json();
   r.idempotency_key = s.idempotency_key;
   r.max_active_per_client = s.max_active_per_client;
@@ -167,8 +170,11 @@ void FarmNode::listen() {
       continue;
     }
     // ["message", channel, job]
-    if (*message && (*message)->size() == 3 && (**message)[0].str() == "message")
-      halt_job(std::string((**message)[2].str()));
+    if (*message && (*message)->size() == 3 && (**message)[0].str() == "message") {
+      const std::string job((**message)[2].str());
+      halt_job(job);
+      if (config_.on_cancel) config_.on_cancel(job);
+    }
   }
 }
 
@@ -281,24 +287,26 @@ bool FarmNode::render_unit(FarmClient& fc, const Unit& unit, const std::atomic<b
   }
   // A cancel or a lost lease stops the render mid-tile (halt()); the flag covers a stop that
   // came before the render was registered.
-  while (job->run_step() != RenderJob::Step::done)
+  do {
     if (stop.load(std::memory_order_relaxed)) job->cancel();
+  } while (job->run_step() != RenderJob::Step::done);
   {
     std::lock_guard lock(mu_);
     rendering_.erase(unit.entry);
   }
-  if (job->canceled()) return false;
+  // (a stop after the last step still drops the result: the lease may be another node's now)
+  if (job->canceled() || stop.load()) return false;
   const std::string payload = encode_unit(unit_result(*job));
   auto status = fc.complete(unit, payload);
   counters_.units_rendered += 1;
-  if (status && *status == CompleteStatus::Assemble) assemble(fc, *p, unit.job);
+  if (status && *status == CompleteStatus::Assemble) assemble(fc, p->job, unit.job);
   return true;
 }
 
-void FarmNode::assemble(FarmClient& fc, const Prepared& p, const std::string& job) {
-  auto tiles = fc.tiles(job, p.job.units);
-  if (!tiles) return;  // the assembling deadline hands the job to another node
-  UnitAssembler assembler(p.job.width, p.job.height);
+void FarmNode::assemble(FarmClient& fc, const FarmJob& farm_job, const std::string& job) {
+  auto tiles = fc.tiles(job, farm_job.units);
+  if (!tiles) return;  // the janitor's sweep hands the job to another node
+  UnitAssembler assembler(farm_job.width, farm_job.height);
   for (const auto& bytes : *tiles) {
     std::string error;
     if (!bytes) return;  // canceled meanwhile: the tiles went with it
@@ -309,7 +317,7 @@ void FarmNode::assemble(FarmClient& fc, const Prepared& p, const std::string& jo
   const std::vector<unsigned char> png = encode_png(assembler.image());
   const RenderStats st = assembler.stats();
   auto stored = fc.connection().command(
-      {"SET", fc.key("png:" + p.job.result),
+      {"SET", fc.key("png:" + farm_job.result),
        std::string_view(reinterpret_cast<const char*>(png.data()), png.size()), "PX",
        ms_text(config_.result_ttl)});
   if (!stored) return;
@@ -318,7 +326,7 @@ void FarmNode::assemble(FarmClient& fc, const Prepared& p, const std::string& jo
                    {"reflection_rays", std::to_string(st.reflection_rays)},
                    {"spp_done", std::to_string(st.spp_done)},
                    {"error_estimate", format_number(st.error_estimate)}};
-  if (fc.finish(job, p.job.result, fields)) counters_.jobs_assembled += 1;
+  if (fc.finish(job, farm_job.result, fields)) counters_.jobs_assembled += 1;
 }
 
 void FarmNode::keep_alive() {
@@ -371,6 +379,21 @@ void FarmNode::keep_alive() {
           counters_.units_reclaimed += r->requeued + r->failed;
           cursor = r->cursor;
           if (cursor == "0-0") break;
+        }
+        if (auto swept = fc.sweep(config_.farm.node, config_.lease, config_.job_timeout)) {
+          counters_.jobs_timed_out += swept->timed_out;
+          counters_.jobs_orphaned += swept->orphaned;
+          for (const std::string& job : swept->assemble) {
+            auto fields = fc.job(job);
+            if (!fields || !*fields) continue;
+            std::string why;
+            auto it = (*fields)->find("opts");
+            if (it == (*fields)->end()) continue;
+            if (auto farm_job = FarmJob::from_json(it->second, &why)) {
+              counters_.jobs_reassembled += 1;
+              assemble(fc, *farm_job, job);
+            }
+          }
         }
       }
     }

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -53,6 +54,9 @@ struct FarmSubmission {
   int max_active_per_client = 8;
   int max_jobs = 0;
   std::chrono::milliseconds ttl{std::chrono::hours(1)};
+  // Rendered by the submitting node alone (rf1_record ends it): no units, no scene stored.
+  bool local = false;
+  std::vector<std::pair<std::string, std::string>> fields;  // more fields for the job record
 };
 Result<SubmitResult> submit_job(FarmClient& client, const FarmSubmission& submission);
 
@@ -70,6 +74,11 @@ struct NodeConfig {
   // reconnected.
   std::chrono::milliseconds cancel_poll{200};
   std::chrono::milliseconds result_ttl{std::chrono::hours(1)};
+  // A job running longer than this fails, farm-wide (the janitor's sweep); 0: no limit.
+  std::chrono::milliseconds job_timeout{0};
+  // Called with each job canceled anywhere, as the message arrives (a node's own renders of
+  // local jobs stop there).
+  std::function<void(const std::string&)> on_cancel;
 };
 
 struct NodeCounters {
@@ -78,6 +87,9 @@ struct NodeCounters {
   std::atomic<std::uint64_t> units_failed{0};      // the render could not run
   std::atomic<std::uint64_t> units_reclaimed{0};   // other nodes' units this node requeued
   std::atomic<std::uint64_t> jobs_assembled{0};
+  std::atomic<std::uint64_t> jobs_reassembled{0};  // of an assembler that died (as janitor)
+  std::atomic<std::uint64_t> jobs_timed_out{0};    // failed by this janitor: the farm's limit
+  std::atomic<std::uint64_t> jobs_orphaned{0};     // failed by this janitor: local, node gone
   std::atomic<std::uint64_t> redis_calls{0};
   std::atomic<std::uint64_t> redis_micros{0};      // summed round trips
 };
@@ -123,7 +135,8 @@ class FarmNode {
   // Subscribed to PREFIX cancel: halts the units of each job canceled anywhere.
   void listen();
   bool render_unit(FarmClient& fc, const Unit& unit, const std::atomic<bool>& stop);
-  void assemble(FarmClient& fc, const Prepared& prepared, const std::string& job);
+  // Puts the job's image together from its units' results and finishes it.
+  void assemble(FarmClient& fc, const FarmJob& farm_job, const std::string& job);
   std::shared_ptr<const Prepared> prepare(FarmClient& fc, const Unit& unit, std::string* error);
 
   NodeConfig config_;

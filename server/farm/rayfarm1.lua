@@ -148,9 +148,9 @@ local function retry_or_fail(P, job, unit, try, max_tries, why)
 end
 
 -- ARGV: P, job, client, prio, units, max_active, max_jobs, target, ttl_ms, idem_key,
---       idem_ttl_ms, opts -> {'accepted'|'exists'|'limit'|'full', job}
--- units = 0: a local job, rendered by the accepting node and ended with rf1_record; it counts
--- against the limits and is visible to every node, but is never fed.
+--       idem_ttl_ms, opts, field, value, ... -> {'accepted'|'exists'|'limit'|'full', job}
+-- units = 0: a local job, rendered by the accepting node (its field 'node') and ended with
+-- rf1_record; it counts against the limits and is visible to every node, but is never fed.
 local function submit(_, a)
   local P, job, client = a[1], a[2], a[3]
   local prio, units = tonumber(a[4]), tonumber(a[5])
@@ -158,6 +158,8 @@ local function submit(_, a)
   local ttl, idem, idem_ttl = tonumber(a[9]), a[10], tonumber(a[11])
   if prio ~= 0 and prio ~= 1 and prio ~= 2 then return redis.error_reply('ERR bad priority') end
   if not units or units < 0 then return redis.error_reply('ERR bad unit count') end
+  local bad = check_extra(a, 13)
+  if bad then return redis.error_reply(bad) end
   local ik = nil
   if idem ~= '' then
     ik = P .. 'idem:' .. client .. ':' .. idem
@@ -178,6 +180,7 @@ local function submit(_, a)
   local t = now_ms()
   redis.call('HSET', jk, 'client', client, 'prio', prio, 'units', units, 'fed', 0,
              'done', 0, 'created_ms', t, 'ttl_ms', ttl, 'opts', a[12])
+  for i = 13, #a, 2 do redis.call('HSET', jk, a[i], a[i + 1]) end
   redis.call('ZADD', P .. 'cjobs:' .. client, t, job)
   if ik then redis.call('SET', ik, job, 'PX', idem_ttl) end
   if units == 0 then
@@ -346,6 +349,54 @@ local function reclaim(_, a)
   return {r[1], requeued, failed}
 end
 
+-- ARGV: P, janitor, lease_ms, job_timeout_ms (0: none), count
+--   -> {timed_out, orphaned, job to assemble, ...}
+-- Jobs no unit lease covers: a job running longer than the farm's limit fails (its units stop
+-- on the cancel channel); a local job whose node is gone fails; a job whose assembler is gone
+-- (or has not finished in four leases) goes to the janitor, which assembles it from the tiles
+-- (they are all in Redis).
+local function sweep(_, a)
+  local P, jan, lease, limit, count = a[1], a[2], tonumber(a[3]), tonumber(a[4]), a[5]
+  local t = now_ms()
+  local timed_out, orphaned, assemble = 0, 0, {}
+  local function node_alive(node)
+    return node and redis.call('EXISTS', P .. 'node:' .. node) == 1
+  end
+  if limit > 0 then
+    local ids = redis.call('ZRANGEBYSCORE', P .. 'running', '-inf', t - limit, 'LIMIT', 0, count)
+    for _, job in ipairs(ids) do
+      end_job(P, job, 'failed', 'the job ran longer than the farm\'s limit of ' ..
+              math.floor(limit / 1000) .. ' s: lower spp, max_depth or the image size',
+              {'code', 'timeout'}, 1)
+      redis.call('PUBLISH', P .. 'cancel', job)
+      timed_out = timed_out + 1
+    end
+  end
+  for _, job in ipairs(redis.call('ZRANGEBYSCORE', P .. 'running', '-inf', t - lease,
+                                  'LIMIT', 0, count)) do
+    local f = redis.call('HMGET', P .. 'job:' .. job, 'local', 'node')
+    if f[1] == '1' and not node_alive(f[2]) then
+      end_job(P, job, 'failed', 'the node rendering it (' .. tostring(f[2] or '?') ..
+              ') stopped; submit it again', {'code', 'node_lost'}, 1)
+      orphaned = orphaned + 1
+    end
+  end
+  for _, job in ipairs(redis.call('ZRANGEBYSCORE', P .. 'assembling', '-inf', t - lease,
+                                  'LIMIT', 0, count)) do
+    local jk = P .. 'job:' .. job
+    local f = redis.call('HMGET', jk, 'assembler', 'assembling_ms')
+    -- (an assembler alive but still at it after four leases failed to store the image)
+    if not node_alive(f[1]) or tonumber(f[2] or '0') < t - 4 * lease then
+      redis.call('HSET', jk, 'assembler', jan, 'assembling_ms', t)
+      redis.call('ZADD', P .. 'assembling', t, job)
+      assemble[#assemble + 1] = job
+    end
+  end
+  local out = {timed_out, orphaned}
+  for _, job in ipairs(assemble) do out[#out + 1] = job end
+  return out
+end
+
 -- ARGV: P, job, client -> {'canceled'|'not_found'|'forbidden'|'already', state}
 local function cancel(_, a)
   local P, job, client = a[1], a[2], a[3]
@@ -433,6 +484,7 @@ reg('rf1_fail', fail, {'allow-oom'})
 reg('rf1_release', release, {'allow-oom'})
 reg('rf1_reclaim', reclaim, {'allow-oom'})
 reg('rf1_cancel', cancel, {'allow-oom'})
+reg('rf1_sweep', sweep, {'allow-oom'})
 reg('rf1_finish', finish, {'allow-oom'})
 reg('rf1_record', record)
 reg('rf1_lock', lock, {'allow-oom'})

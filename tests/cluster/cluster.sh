@@ -5,7 +5,8 @@
 # (c) DELETE on node 3 stops a job running on nodes 1-2 within half a second; (d) Redis down: 503
 # with Retry-After on POST /render and /healthz, and after a restart from the same AOF the farm
 # works again; (e) a small job sent after a big one finishes first; (f) a node frozen past its
-# lease: late results dropped; (g) Redis out of memory: 503. Usage: cluster.sh BUILD_DIR.
+# lease: late results dropped; (g) Redis out of memory: 503; (h) small and textured jobs stay
+# on their node, seen from every node. Usage: cluster.sh BUILD_DIR.
 # Exit 77 (skipped) without redis-server, unless RAYFARM_REQUIRE_REDIS=1.
 set -euo pipefail
 build=$(cd "$1" && pwd)
@@ -131,10 +132,46 @@ sleep 0.3
   || fail "a node still renders the canceled job"
 echo "cluster: (c) canceled on node 3, every unit stopped within $took ms (the DELETE took $del_s s)"
 
+# (h) A small job stays on the node that took it, and so does one with texture files (only that
+# node has them); every node reports it and serves its image.
+small=$(curl -s --data-binary @scenes/cho.txt "$(url 3 "/render?width=64&height=48&seed=21")" | field '["id"]')
+[ "$(rcli hget "rf:job:$small" local)" = 1 ] && [ "$(rcli hget "rf:job:$small" node)" = node3 ] \
+  || fail "the small job is not node 3's own: $(rcli hgetall "rf:job:$small" | head -20 | paste -sd' ')"
+for _ in $(seq 200); do [ "$(state_on 1 "$small")" = done ] && break; sleep 0.05; done
+[ "$(state_on 1 "$small")" = done ] || fail "node 1 does not see node 3's small job done"
+curl -s -o "$dir/small.png" "$(url 1 "/jobs/$small/image")"
+"$build/client/rayfarm" render scenes/cho.txt --width 64 --height 48 --seed 21 -o "$dir/small-local.png" -q
+cmp -s "$dir/small.png" "$dir/small-local.png" || fail "node 1 serves another image of node 3's job"
+(cd scenes && curl -s -o "$dir/tex.png" -w '%{http_code}' -F scene=@textures.txt \
+  -F 'textures/bricks.ppm=@textures/bricks.ppm' -F 'textures/checker.ppm=@textures/checker.ppm' \
+  -F 'textures/slide.ppm=@textures/slide.ppm' "$(url 2 "/render?width=160&height=120&wait=1")") \
+  >"$dir/tex.code"
+[ "$(cat "$dir/tex.code")" = 200 ] || fail "a scene with textures on a farm node gave $(cat "$dir/tex.code")"
+(cd scenes && "$build/client/rayfarm" render textures.txt --width 160 --height 120 -o "$dir/tex-local.png" -q)
+cmp -s "$dir/tex.png" "$dir/tex-local.png" || fail "the textured render differs from rayfarm render"
+echo "cluster: (h) a small job and a textured one rendered on their own nodes, seen from every node"
+
+# (i) An Idempotency-Key is the farm's: the same request on another node is the same job; the
+# key with another request is 422 on any node. A job's warnings are seen from every node.
+k="key-$RANDOM"
+(cat scenes/minimal.txt; printf 'sphere\n{  material grey\n   center 4 3 20\n   radius 1\n}\n') >"$dir/warn.txt"
+first=$(curl -s -H "Idempotency-Key: $k" --data-binary @"$dir/warn.txt" "$(url 1 "/render?width=160&height=120&spp=8")" | field '["id"]')
+again=$(curl -s -D "$dir/again.h" -H "Idempotency-Key: $k" --data-binary @"$dir/warn.txt" "$(url 2 "/render?width=160&height=120&spp=8")" | field '["id"]')
+[ "$first" = "$again" ] && grep -qi '^Idempotent-Replayed: true' "$dir/again.h" \
+  || fail "the same key on node 2 gave job $again, not $first"
+code=$(curl -s -o "$dir/reused.json" -w '%{http_code}' -H "Idempotency-Key: $k" --data-binary @"$dir/warn.txt" "$(url 3 "/render?width=160&height=120&spp=9")")
+[ "$code" = 422 ] && grep -q idempotency_key_reused "$dir/reused.json" || fail "the key reused on node 3 gave $code $(cat "$dir/reused.json")"
+for n in 1 3; do
+  curl -s "$(url "$n" "/jobs/$first")" | grep -q '"warnings": *\[ *{' || fail "node $n does not show the job's warnings"
+done
+echo "cluster: (i) an Idempotency-Key and a job's warnings hold on every node"
+
 # (e) Fairness across nodes: a small job sent after a big one finishes first.
 big=$(curl -s --data-binary @scenes/cho.txt "$(url 1 "/render?width=640&height=480&spp=128&seed=11")" | field '["id"]')
 sleep 0.2
-small=$(curl -s --data-binary @scenes/cho.txt "$(url 3 "/render?width=64&height=48&seed=12")" | field '["id"]')
+# (above --distribute-work, so the farm feeds it: one unit)
+small=$(curl -s --data-binary @scenes/cho.txt "$(url 3 "/render?width=160&height=120&spp=8&seed=12")" | field '["id"]')
+[ "$(rcli hget "rf:job:$small" units)" = 1 ] || fail "the small job is not one unit of the farm's"
 for _ in $(seq 300); do
   [ "$(state_on 2 "$small")" = done ] && break
   sleep 0.05
@@ -177,6 +214,19 @@ code=$(curl -s -o /dev/null -w '%{http_code}' --data-binary @scenes/cho.txt "$(u
 [ "$code" = 200 ] || fail "a render once Redis had memory again gave $code"
 for n in 1 2 3; do kill -0 "${pids[$n]}" || fail "node $n died"; done
 echo "cluster: (g) Redis out of memory: 503 + Retry-After, reads answered, then renders again"
+
+# (j) A node killed while rendering its own job (textures keep it there): the job fails with
+# node_lost on every node, instead of running forever.
+tex=$(cd scenes && curl -s -F scene=@textures.txt -F 'textures/bricks.ppm=@textures/bricks.ppm' \
+  -F 'textures/checker.ppm=@textures/checker.ppm' -F 'textures/slide.ppm=@textures/slide.ppm' \
+  "$(url 2 "/render?width=1280&height=960&spp=64")" | field '["id"]')
+for _ in $(seq 100); do [ "$(state_on 2 "$tex")" = running ] && break; sleep 0.05; done
+kill -9 "${pids[2]}"; wait "${pids[2]}" 2>/dev/null || true; pids[2]=""
+for _ in $(seq 100); do [ "$(state_on 1 "$tex")" = failed ] && break; sleep 0.1; done
+curl -s "$(url 1 "/jobs/$tex")" | grep -q '"code": *"node_lost"' \
+  || fail "node 2's own job after its death: $(curl -s "$(url 1 "/jobs/$tex")" | head -c 400)"
+start_node 2
+echo "cluster: (j) a node killed rendering its own job: the job failed with node_lost"
 
 # (d) Redis down, then back from its AOF.
 kill -9 "$redis_pid"; wait "$redis_pid" 2>/dev/null || true; redis_pid=""

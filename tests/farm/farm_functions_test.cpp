@@ -348,6 +348,83 @@ TEST_F(FarmFunctions, ALocalJobCountsAgainstTheLimitUntilRecorded) {
   EXPECT_EQ(*n->record(r), RecordStatus::Forbidden);
 }
 
+TEST_F(FarmFunctions, TheSweepFailsALocalJobWhoseNodeIsGone) {
+  TestNode n = node("n1");
+  SubmitRequest q;
+  q.client = "A";
+  q.units = 0;
+  q.job = "mine";
+  q.fields = {{"node", "n1"}};
+  ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
+  q.job = "lost";
+  q.fields = {{"node", "ghost"}};
+  ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
+  ASSERT_TRUE(n->heartbeat("{}", 10s, {}));  // n1 is alive; ghost never was
+  // Not before a lease has passed since the job started.
+  auto early = n->sweep("n1", 10s, 0ms);
+  ASSERT_TRUE(early) << early.error().message;
+  EXPECT_EQ(early->orphaned, 0);
+  std::this_thread::sleep_for(60ms);
+  auto r = n->sweep("n1", 50ms, 0ms);
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_EQ(r->orphaned, 1);
+  EXPECT_EQ(hget("job:lost", "state"), "failed");
+  EXPECT_EQ(hget("job:lost", "code"), "node_lost");
+  EXPECT_NE(hget("job:lost", "error").find("ghost"), std::string::npos);
+  EXPECT_EQ(hget("job:mine", "state"), "running");
+  EXPECT_EQ(hget("client:A", "active"), "1");
+}
+
+TEST_F(FarmFunctions, TheSweepFailsAJobPastTheFarmsLimitAndStopsItsUnits) {
+  TestNode n = node("n1");
+  submit(n, "j", "A", 3);
+  auto u = n->take();  // running from here
+  ASSERT_TRUE(u && *u);
+  Connection sub(server_->options());
+  ASSERT_TRUE(sub.command({"SUBSCRIBE", prefix_ + "cancel"}));
+  auto none = n->sweep("n1", 10s, 10s);
+  ASSERT_TRUE(none);
+  EXPECT_EQ(none->timed_out, 0);
+  std::this_thread::sleep_for(60ms);
+  auto r = n->sweep("n1", 10s, 50ms);
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_EQ(r->timed_out, 1);
+  EXPECT_EQ(hget("job:j", "state"), "failed");
+  EXPECT_EQ(hget("job:j", "code"), "timeout");
+  auto msg = sub.next_message(1s);
+  ASSERT_TRUE(msg && *msg);
+  ASSERT_EQ((*msg)->size(), 3u);
+  EXPECT_EQ((**msg)[2].str(), "j");
+  EXPECT_EQ(*n->complete(**u, "px"), CompleteStatus::Dropped);
+}
+
+TEST_F(FarmFunctions, TheSweepHandsAJobWhoseAssemblerIsGoneToTheJanitor) {
+  TestNode n1 = node("n1"), n2 = node("n2");
+  submit(n1, "j", "A", 1);
+  auto u = n1->take();
+  ASSERT_TRUE(u && *u);
+  ASSERT_EQ(*n1->complete(**u, "px"), CompleteStatus::Assemble);  // n1 then dies
+  ASSERT_TRUE(n2->heartbeat("{}", 10s, {}));
+  std::this_thread::sleep_for(60ms);
+  auto r = n2->sweep("n2", 50ms, 0ms);
+  ASSERT_TRUE(r) << r.error().message;
+  EXPECT_EQ(r->assemble, std::vector<std::string>{"j"});
+  EXPECT_EQ(hget("job:j", "assembler"), "n2");
+  EXPECT_EQ(n2->sweep("n2", 50ms, 0ms)->assemble.size(), 0u);  // a lease for n2 to do it
+  ASSERT_TRUE(n2->finish("j", "png:j"));
+  EXPECT_EQ(hget("job:j", "state"), "done");
+  // A living assembler keeps the job for four leases.
+  submit(n1, "k", "A", 1);
+  auto v = n1->take();
+  ASSERT_TRUE(v && *v);
+  ASSERT_EQ(*n1->complete(**v, "px"), CompleteStatus::Assemble);
+  ASSERT_TRUE(n1->heartbeat("{}", 10s, {}));
+  std::this_thread::sleep_for(150ms);
+  EXPECT_EQ(n2->sweep("n2", 100ms, 0ms)->assemble.size(), 0u);
+  std::this_thread::sleep_for(300ms);
+  EXPECT_EQ(n2->sweep("n2", 100ms, 0ms)->assemble, std::vector<std::string>{"k"});
+}
+
 TEST_F(FarmFunctions, BlockForWorkWakesOnASubmission) {
   TestNode n1 = node("n1"), n2 = node("n2");
   std::optional<Unit> got;

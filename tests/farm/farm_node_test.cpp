@@ -10,6 +10,7 @@
 #include "farm_node.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/load.h"
+#include "rayfarm/render_unit.h"
 #include "rayfarm/sha256.h"
 
 namespace rayfarm::farm::test {
@@ -158,6 +159,38 @@ TEST_F(FarmNodes, ACancelWhoseMessageWasMissedIsFoundByThePoll) {
     std::this_thread::sleep_for(1ms);
   EXPECT_EQ(a->in_flight(), 0u);
   EXPECT_LT(std::chrono::steady_clock::now() - t0, 1s);
+}
+
+TEST_F(FarmNodes, AJobWhoseAssemblerDiedIsAssembledByTheJanitor) {
+  auto ghost = node("ghost");
+  const FarmSubmission s = submission("j6", "scenes/cho.txt", 96, 64, 2, 2e4);
+  ASSERT_TRUE(submit_job(*ghost.farm, s));
+  // The ghost renders every unit as a node would, is told to assemble, and dies.
+  LoadedScene loaded = load_scene(s.scene_text);
+  ASSERT_TRUE(loaded.scene);
+  std::string error;
+  auto prepared = PreparedRender::create(*loaded.scene, s.options, &error);
+  ASSERT_TRUE(prepared) << error;
+  bool told = false;
+  for (int i = 0; i < 100 && !told; ++i) {
+    auto u = ghost->take();
+    ASSERT_TRUE(u && *u);
+    auto job = FarmJob::from_json((*u)->opts, &error);
+    ASSERT_TRUE(job) << error;
+    auto render = prepared->job(job->unit_range((*u)->index), &error);
+    ASSERT_TRUE(render) << error;
+    while (render->run_step() != RenderJob::Step::done) {
+    }
+    told = *ghost->complete(**u, encode_unit(unit_result(*render))) == CompleteStatus::Assemble;
+  }
+  ASSERT_TRUE(told);
+  ASSERT_EQ(hget("job:j6", "state"), "assembling");
+  auto a = start_node("a");
+  ASSERT_EQ(wait_final("j6", 10s), "done") << hget("job:j6", "error");
+  EXPECT_EQ(a->counters().jobs_reassembled.load(), 1u);
+  auto png = job_png(*ghost.farm, s.result_key);
+  ASSERT_TRUE(png && *png);
+  EXPECT_EQ(**png, local_png(s));
 }
 
 TEST_F(FarmNodes, AJobWhoseSceneIsGoneFailsAfterThreeTriesWithTheReason) {
