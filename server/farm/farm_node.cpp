@@ -162,6 +162,7 @@ void FarmNode::listen() {
     if (!subscribed) {
       if (!connection.wait_connected(std::chrono::milliseconds(200))) continue;
       subscribed = static_cast<bool>(connection.command({"SUBSCRIBE", channel}));
+      if (subscribed) listening_ = true;
       continue;  // (a cancel published meanwhile is the keep-alive poll's)
     }
     auto message = connection.next_message(std::chrono::milliseconds(200));
@@ -188,6 +189,9 @@ void FarmNode::work(int index) {
   FarmConfig fc_config = config_.farm;
   FarmClient fc(connection, fc_config);
   (void)index;
+  // No unit before the node hears cancels: one taken earlier could miss its job's.
+  while (running_ && !abandoned_ && !listening_)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
   while (running_) {
     if (!connection.connected() && !connection.wait_connected(std::chrono::milliseconds(200)))
       continue;

@@ -144,6 +144,7 @@ class FarmNode {
   NodeCounters counters_;
   std::atomic<bool> running_{false};
   std::atomic<bool> abandoned_{false};
+  std::atomic<bool> listening_{false};  // subscribed to the cancel channel once
   std::vector<std::thread> threads_;
 
   mutable std::mutex mu_;

@@ -138,7 +138,14 @@ TEST_F(FarmNodes, ACancelFromAnyConnectionStopsEveryNodeAtOnce) {
     std::this_thread::sleep_for(1ms);
   const auto stopped_after = std::chrono::steady_clock::now() - t0;
   EXPECT_EQ(a->in_flight() + b->in_flight(), 0u);
-  EXPECT_LT(stopped_after, 500ms) << "running units stop within a fraction of a second";
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  // Renders are 5-15x slower there, and their mid-tile checks as far apart; still far below
+  // the 3 s heartbeat, the only other way these units would stop this soon.
+  constexpr auto kBound = 1500ms;
+#else
+  constexpr auto kBound = 500ms;
+#endif
+  EXPECT_LT(stopped_after, kBound) << "running units stop within a fraction of a second";
   EXPECT_EQ(hget("job:j3", "state"), "canceled");
   EXPECT_EQ(integer({"EXISTS", prefix_ + "tiles:j3"}), 0);
 }
