@@ -39,21 +39,6 @@ double percentile(std::vector<double>& v, double p) {
   return v[k];
 }
 
-// utime + stime of a process, in seconds.
-double cpu_seconds(int pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string line;
-  std::getline(in, line);
-  std::istringstream rest(line.substr(line.rfind(')') + 2));
-  std::string field;
-  unsigned long long utime = 0, stime = 0;
-  for (int i = 3; i <= 15 && rest >> field; ++i) {
-    if (i == 14) utime = std::stoull(field);
-    if (i == 15) stime = std::stoull(field);
-  }
-  return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
-
 double us_since(Clock::time_point t) {
   return std::chrono::duration<double, std::micro>(Clock::now() - t).count();
 }
@@ -136,13 +121,13 @@ int main(int argc, char** argv) {
         }
       });
     while (ready.load() < k) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-    const double cpu0 = cpu_seconds(server.pid());
+    const double cpu0 = server.cpu_seconds();
     const auto t0 = Clock::now();
     std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
     stop = true;
     for (auto& th : threads) th.join();
     const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-    const double cpu = cpu_seconds(server.pid()) - cpu0;
+    const double cpu = server.cpu_seconds() - cpu0;
     ThreadStats all;
     for (auto& s : stats) {
       all.units += s.units;

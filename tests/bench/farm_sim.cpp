@@ -34,20 +34,6 @@ using std::chrono::milliseconds;
 
 namespace {
 
-double cpu_seconds(int pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
-  std::string line;
-  std::getline(in, line);
-  std::istringstream rest(line.substr(line.rfind(')') + 2));
-  std::string field;
-  unsigned long long utime = 0, stime = 0;
-  for (int i = 3; i <= 15 && rest >> field; ++i) {
-    if (i == 14) utime = std::stoull(field);
-    if (i == 15) stime = std::stoull(field);
-  }
-  return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
-
 struct Shared {
   std::mutex mu;
   std::map<std::string, Clock::time_point> abandoned;  // "job/unit" -> when its node was killed
@@ -188,7 +174,7 @@ int main(int argc, char** argv) {
   std::vector<SimNode*> live;
   for (auto& n : all) live.push_back(n.get());
   std::mt19937 rng(12345);
-  const double cpu0 = cpu_seconds(server.pid());
+  const double cpu0 = server.cpu_seconds();
   const long units0 = shared.units.load();
   const auto t0 = Clock::now();
   int killed = 0;
@@ -208,7 +194,7 @@ int main(int argc, char** argv) {
     }
   }
   const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
-  const double cpu = cpu_seconds(server.pid()) - cpu0;
+  const double cpu = server.cpu_seconds() - cpu0;
   const long done = shared.units.load() - units0;
   shared.ending = true;
   for (auto& n : all) n->killed = true;

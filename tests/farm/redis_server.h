@@ -30,6 +30,8 @@ class RedisServer {
   void kill9();
   bool running() const { return pid_ > 0; }
   int pid() const { return pid_; }
+  // CPU time (user + system) the server has used so far, in seconds (for the benchmarks).
+  double cpu_seconds() const;
 
   const std::string& dir() const { return dir_; }
   std::string socket() const { return dir_ + "/r.sock"; }
