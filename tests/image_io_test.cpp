@@ -9,6 +9,9 @@
 #include <stdexcept>
 #include <thread>
 
+#include "rayfarm/sha256.h"
+#include "test_util.h"
+
 namespace rayfarm {
 namespace {
 
@@ -44,7 +47,7 @@ void put_chunk(std::string& png, std::string_view type, std::string_view data,
   put_be32(png, libdeflate_crc32(0, body.data(), body.size()));
 }
 
-// A PNG built by hand, so that colour types stb_image_write never produces can be tested.
+// A PNG built by hand, so that colour types the encoder never produces can be tested.
 // `rows` are the raw scanlines, each with its leading filter byte.
 std::string make_png(std::uint32_t width, std::uint32_t height, int bit_depth, int colour_type,
                      std::string_view rows) {
@@ -122,6 +125,22 @@ TEST(ImageIo, PngRowsUseTheUpFilter) {
   libdeflate_free_decompressor(d);
   ASSERT_EQ(result, LIBDEFLATE_SUCCESS);
   for (int row = 0; row < 4; ++row) EXPECT_EQ(raw[row * 16], 2) << "row " << row;
+}
+
+// The PNG writer must keep writing the bytes it wrote when stb_image_write (filter forced
+// to "up", libdeflate level 1) encoded them: files and their hashes stay as they were. The
+// images themselves are pinned by the golden test.
+TEST(ImageIo, PngBytesAreTheEarlierEncodersBytes) {
+  const Scene scene = test::scene_from(test::lecture_scene());
+  RenderOptions small;
+  small.width = 13;
+  small.height = 7;
+  const std::vector<unsigned char> tiny = encode_png(test::render(scene, small));
+  EXPECT_EQ(sha256_hex(view(tiny)),
+            "420bc00c7792ad57c74c2e3a87544aebcc69e11a996d5d34ade9308bfa272a0a");
+  const std::vector<unsigned char> full = encode_png(test::render(scene, {}, 2));
+  EXPECT_EQ(sha256_hex(view(full)),
+            "346fbaa3120cce434c932d91944dab378efaad14740ead6bccd0d2ac6451b8c9");
 }
 
 TEST(ImageIo, ConcurrentPngEncodesAgree) {

@@ -1,5 +1,5 @@
-// Encoding and decoding images: PNG (stb_image_write with libdeflate as its compressor,
-// stb_image to read) and binary PPM (P6; P3 is read too).
+// Encoding and decoding images: PNG (written with libdeflate as its compressor, read with
+// stb_image) and binary PPM (P6; P3 is read too).
 #pragma once
 
 #include <optional>
@@ -13,7 +13,8 @@
 namespace rayfarm {
 
 // The encoders throw std::invalid_argument when `rgb` is not width*height*3 bytes long; PNG
-// also for an empty image or one too large for stb_image_write's int arithmetic (~350 Mpixel).
+// also for an empty image or one over 1 GiB of filtered rows (~350 Mpixel), which one IDAT
+// chunk would not hold far below its 2 GiB limit.
 std::vector<unsigned char> encode_png(const Image& image);
 std::vector<unsigned char> encode_ppm(const Image& image);
 std::vector<unsigned char> encode_image(const Image& image, ImageFormat format);

@@ -83,6 +83,8 @@ class RenderJob {
   virtual RenderStats stats() const = 0;
   // The final image when finished; the image so far otherwise (unrendered tiles black).
   virtual Image image() const = 0;
+  // image(), moved out instead of copied once the job has finished (then image() is 0x0).
+  virtual Image take_image() = 0;
   virtual int width() const = 0;
   virtual int height() const = 0;
   virtual TileRange range() const = 0;

@@ -1,8 +1,4 @@
-// The stb_image_write and stb_image implementations (PNG only), with libdeflate as the PNG
-// compressor, behind the wrappers of stb_wrappers.h.
-#include <libdeflate.h>
-
-#include <climits>
+// The stb_image implementation (PNG only), behind the wrapper of stb_wrappers.h.
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
@@ -10,25 +6,6 @@
 #include "image/stb_wrappers.h"
 
 namespace {
-
-// stb's own deflate costs ~60 ms on an 800x600 image whatever its level; libdeflate at level 1
-// is several times faster and, with the "up" filter, smaller too. stb asks for
-// a zlib stream in memory from malloc, which it frees with free().
-unsigned char* zlib_compress(unsigned char* data, int data_len, int* out_len, int /*quality*/) {
-  using Compressor = std::unique_ptr<libdeflate_compressor, decltype(&libdeflate_free_compressor)>;
-  Compressor compressor(libdeflate_alloc_compressor(1), &libdeflate_free_compressor);
-  if (!compressor || data_len < 0) return nullptr;
-  std::size_t bound = libdeflate_zlib_compress_bound(compressor.get(), data_len);
-  auto* out = static_cast<unsigned char*>(std::malloc(bound));
-  if (!out) return nullptr;
-  std::size_t size = libdeflate_zlib_compress(compressor.get(), data, data_len, out, bound);
-  if (size == 0 || size > INT_MAX) {
-    std::free(out);
-    return nullptr;
-  }
-  *out_len = static_cast<int>(size);
-  return out;
-}
 
 struct FreeDeleter {
   void operator()(void* p) const { std::free(p); }
@@ -49,12 +26,6 @@ void* capped_realloc(void* p, std::size_t size) {
 #pragma GCC diagnostic ignored "-Wunused-function"
 #pragma GCC diagnostic ignored "-Wmissing-field-initializers"
 
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_STATIC
-#define STBI_WRITE_NO_STDIO
-#define STBIW_ZLIB_COMPRESS zlib_compress
-#include <stb_image_write.h>
-
 #define STB_IMAGE_IMPLEMENTATION
 #define STB_IMAGE_STATIC
 #define STBI_ONLY_PNG
@@ -69,26 +40,6 @@ void* capped_realloc(void* p, std::size_t size) {
 #pragma GCC diagnostic pop
 
 namespace rayfarm::stb {
-
-namespace {
-
-void append(void* context, void* data, int size) {
-  auto* out = static_cast<std::vector<unsigned char>*>(context);
-  auto* bytes = static_cast<const unsigned char*>(data);
-  out->insert(out->end(), bytes, bytes + size);
-}
-
-}  // namespace
-
-std::vector<unsigned char> encode_png(const unsigned char* pixels, int width, int height,
-                                      int channels) {
-  // stb reads this global on every encode: set it exactly once (a thread-safe static
-  // initialisation), never per call, so concurrent encodes do not race on it.
-  [[maybe_unused]] static const bool filter_forced = (stbi_write_force_png_filter = 2, true);
-  std::vector<unsigned char> out;
-  if (!stbi_write_png_to_func(append, &out, width, height, channels, pixels, 0)) out.clear();
-  return out;
-}
 
 DecodedPng decode_png_rgb(const unsigned char* data, int size, std::size_t alloc_limit) {
   struct LimitScope {

@@ -1,6 +1,5 @@
-// Small wrappers over stb_image_write (PNG encoding) and stb_image (PNG decoding). They are
-// compiled in stb_impl.cpp, the only file that includes stb, so its macros and static state
-// stay out of the rest of core.
+// A small wrapper over stb_image (PNG decoding), compiled in stb_impl.cpp, the only file that
+// includes stb, so its macros and static state stay out of the rest of core.
 #pragma once
 
 #include <cstddef>
@@ -8,11 +7,6 @@
 #include <vector>
 
 namespace rayfarm::stb {
-
-// PNG of 8-bit pixels, `channels` (1..4) interleaved samples each, rows top to bottom: "up" row
-// filter, libdeflate level 1. Empty on failure. The caller keeps the byte count within int.
-std::vector<unsigned char> encode_png(const unsigned char* pixels, int width, int height,
-                                      int channels);
 
 struct DecodedPng {
   int width = 0;

@@ -99,6 +99,18 @@ class TiledRender final : public RenderJob {
     return full;
   }
 
+  Image take_image() override {
+    {
+      std::lock_guard lock(mu_);
+      if (finished_ && row0_ == 0 && row1_ == p_.height()) {
+        Image out = std::move(image_);
+        image_ = Image();
+        return out;
+      }
+    }
+    return image();
+  }
+
   std::vector<std::uint8_t> range_pixels() const override {
     std::lock_guard lock(mu_);
     std::vector<std::uint8_t> out;
@@ -382,7 +394,7 @@ Image render_image(const Scene& scene, const RenderOptions& options, int threads
   work();
   for (auto& t : pool) t.join();
   if (stats) *stats = job->stats();
-  return job->image();
+  return job->take_image();
 }
 
 }  // namespace rayfarm
