@@ -140,7 +140,7 @@ struct BvhRay {
   }
 
   // Bit i set: the ray meets child i's widened box within [0, limit]; t_near its entries.
-  int hits(const BvhNode& n, float limit, bvh_simd::F4& t_near) const {
+  [[gnu::always_inline]] int hits(const BvhNode& n, float limit, bvh_simd::F4& t_near) const {
     using namespace bvh_simd;
     F4 tn = (load(n.box[near_row[0]]) - near_origin[0]) * inv_dir[0];
     F4 tf = (load(n.box[far_row[0]]) - far_origin[0]) * inv_dir[0];

@@ -69,8 +69,8 @@ template <class T>
 T shape_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, int index, Origin from) {
   if (s.kind == PreparedShape<T>::revsurf) return revsurf_t(s, o, d, index == from.object);
   if (index == from.object) return T(-1);  // flat: never met again by a ray leaving it
-  auto t = plane_distance(o, d, s.normal, s.point);
-  if (!t || !(*t > 0)) return T(-1);
+  const T t = plane_distance_ahead(o, d, s.normal, s.point);
+  if (!(t > 0)) return T(-1);
   if (from.object >= 0) {
     // A ray that starts in this shape's plane (a coplanar neighbour) cannot hit it.
     const Vec3<T> a = glm::abs(o), b = glm::abs(s.point);
@@ -79,7 +79,7 @@ T shape_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, int ind
       return T(-1);
   }
   T qx, qy;
-  frame_coords(s, o + *t * d, qx, qy);
+  frame_coords(s, o + t * d, qx, qy);
   if (s.kind == PreparedShape<T>::triangle) {
     int pos = 0, neg = 0;
     for (int i = 0; i < 3; ++i) {
@@ -88,9 +88,9 @@ T shape_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, int ind
       pos += side > 0;
       neg += side < 0;
     }
-    return pos > 0 && neg > 0 ? T(-1) : *t;
+    return pos > 0 && neg > 0 ? T(-1) : t;
   }
-  return qx >= 0 && qx <= s.width && qy >= 0 && qy <= s.height ? *t : T(-1);
+  return qx >= 0 && qx <= s.width && qy >= 0 && qy <= s.height ? t : T(-1);
 }
 
 // The outward normal at p (before it is turned to face the ray).
