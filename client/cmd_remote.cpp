@@ -50,7 +50,7 @@ int finish(const Remote& remote, const nlohmann::json& status, const std::string
               << "\n";
     return kNo;
   }
-  auto res = remote.client()->Get("/jobs/" + id + "/image?format=" + format, remote.headers());
+  auto res = remote.client()->get("/jobs/" + id + "/image?format=" + format, remote.headers());
   if (!res || res->status != 200) return report_http_error(res, "fetching the image");
   if (!write_output(out, res->body.data(), res->body.size())) return kBadInput;
   if (!quiet) std::cerr << summary_line(status, out, remote.url) << "\n";
@@ -108,13 +108,13 @@ int remote_render(const std::string& scene_path, const std::string& text,
   auto client = remote.client();
   auto post = [&] {
     if (textures.empty())
-      return client->Post("/render" + query, remote.headers(), text, "text/plain");
+      return client->post("/render" + query, remote.headers(), text, "text/plain");
     // Part names are the paths exactly as the scene writes them (docs/http-api.md#textures).
-    httplib::MultipartFormDataItems parts = {{"scene", text, "scene", "text/plain"}};
+    std::vector<HttpPart> parts = {{"scene", text, "scene", "text/plain"}};
     for (const auto& [path, bytes] : textures)
       parts.push_back({path, bytes, std::filesystem::path(path).filename().string(),
                        "application/octet-stream"});
-    return client->Post("/render" + query, remote.headers(), parts);
+    return client->post_multipart("/render" + query, remote.headers(), parts);
   };
   auto res = post();
   if (!res || res->status != 202)
@@ -151,7 +151,7 @@ Runner add_status(CLI::App& app) {
   return [args]() -> int {
     auto remote = remote_for(*args);
     if (!remote) return kBadInput;
-    auto res = remote->client()->Get("/jobs/" + args->id, remote->headers());
+    auto res = remote->client()->get("/jobs/" + args->id, remote->headers());
     if (!res || res->status != 200) return report_http_error(res, "job " + args->id);
     auto status = nlohmann::json::parse(res->body, nullptr, false);
     if (status.is_discarded() || !status.is_object()) {
@@ -172,7 +172,7 @@ Runner add_cancel(CLI::App& app) {
   return [args]() -> int {
     auto remote = remote_for(*args);
     if (!remote) return kBadInput;
-    auto res = remote->client()->Delete("/jobs/" + args->id, remote->headers());
+    auto res = remote->client()->del("/jobs/" + args->id, remote->headers());
     if (!res || res->status != 200) return report_http_error(res, "canceling " + args->id);
     auto status = nlohmann::json::parse(res->body, nullptr, false);
     const std::string state = status.is_object() ? status.value("state", "") : "";
@@ -223,7 +223,7 @@ Runner add_jobs(CLI::App& app) {
   return [args]() -> int {
     auto remote = remote_for(*args, false);
     if (!remote) return kBadInput;
-    auto res = remote->client()->Get("/jobs", remote->headers());
+    auto res = remote->client()->get("/jobs", remote->headers());
     if (!res || res->status != 200) return report_http_error(res, "listing jobs");
     auto body = nlohmann::json::parse(res->body, nullptr, false);
     if (body.is_discarded() || !body.contains("jobs") || !body["jobs"].is_array()) {

@@ -112,10 +112,8 @@ StreamEnd read_events(const Remote& remote, const std::string& id, RemoteBar& ba
                       bool cancel_on_interrupt, nlohmann::json& final_status) {
   StreamEnd end = StreamEnd::unavailable;
   std::string buffer;
-  remote.client()->Get(
-      "/jobs/" + id + "/events", remote.headers(),
-      [](const httplib::Response& r) { return r.status == 200; },
-      [&](const char* data, size_t size) {
+  remote.client()->get_stream(
+      "/jobs/" + id + "/events", remote.headers(), [&](const char* data, size_t size) {
         if (interrupted && cancel_on_interrupt) {
           end = StreamEnd::user_interrupt;
           return false;
@@ -152,7 +150,7 @@ std::optional<nlohmann::json> follow_job(const Remote& remote, const std::string
   RemoteBar bar(id, quiet);
   auto cancel = [&]() -> std::optional<nlohmann::json> {
     bar.end();
-    auto res = remote.client()->Delete("/jobs/" + id, remote.headers());
+    auto res = remote.client()->del("/jobs/" + id, remote.headers());
     std::cerr << "rayfarm: interrupted; "
               << (res && res->status == 200 ? "canceled job " : "could not cancel job ") << id
               << "\n";
@@ -181,7 +179,7 @@ std::optional<nlohmann::json> follow_job(const Remote& remote, const std::string
   auto client = remote.client();
   for (;;) {
     if (interrupted && cancel_on_interrupt) return cancel();
-    auto res = client->Get("/jobs/" + id, remote.headers());
+    auto res = client->get("/jobs/" + id, remote.headers());
     if (!res || res->status != 200) {
       bar.end();
       exit_code = report_http_error(res, "job " + id);

@@ -9,17 +9,11 @@
 
 namespace rayfarm::cli {
 
-std::unique_ptr<httplib::Client> Remote::client() const {
-  auto c = std::make_unique<httplib::Client>(url);
-  c->set_connection_timeout(5, 0);
-  c->set_read_timeout(600, 0);
-  c->set_write_timeout(60, 0);
-  return c;
-}
+std::unique_ptr<HttpClient> Remote::client() const { return http_client(url); }
 
-httplib::Headers Remote::headers() const {
-  httplib::Headers h;
-  if (!token.empty()) h.emplace("Authorization", "Bearer " + token);
+HttpHeaders Remote::headers() const {
+  HttpHeaders h;
+  if (!token.empty()) h.emplace_back("Authorization", "Bearer " + token);
   return h;
 }
 
@@ -61,14 +55,14 @@ std::string server_token(const std::string& flag) {
   return env ? env : "";
 }
 
-int report_http_error(const httplib::Result& result, const std::string& what,
+int report_http_error(const HttpResult& result, const std::string& what,
                       const std::string& scene_name, const std::string* scene_text) {
   if (!result) {
-    const httplib::Error e = result.error();
-    std::string why = httplib::to_string(e);
-    if (e == httplib::Error::Connection)
+    const HttpError e = result.error();
+    std::string why = result.why();
+    if (e == HttpError::connection)
       why = "cannot connect (connection refused, or no such host): is rayfarmd running there?";
-    else if (e == httplib::Error::Read || e == httplib::Error::Write)
+    else if (e == HttpError::read || e == HttpError::write)
       why = "the connection broke off (" + why + "): the server may have stopped or timed out";
     std::cerr << "rayfarm: " << what << ": " << why << "\n";
     return kServerError;

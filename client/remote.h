@@ -6,9 +6,9 @@
 #include <optional>
 #include <string>
 
-#include <httplib.h>
 #include <nlohmann/json.hpp>
 
+#include "http.h"
 #include "rayfarm/options.h"
 
 namespace rayfarm::cli {
@@ -17,8 +17,8 @@ struct Remote {
   std::string url;    // http://host:port
   std::string token;  // bearer token, optional
 
-  std::unique_ptr<httplib::Client> client() const;
-  httplib::Headers headers() const;
+  std::unique_ptr<HttpClient> client() const;
+  HttpHeaders headers() const;
 };
 
 // The server URL from the flag or RAYFARM_SERVER; empty when neither is set, or for "none".
@@ -30,7 +30,7 @@ std::string server_token(const std::string& flag);
 // Prints a server error body (with FILE:LINE:COL for scene errors) and returns the exit code
 // it maps to: 2 for the request's fault (4xx), 3 for the server's (5xx, 429, network).
 // With the scene's text, scene errors are shown with their source line and a caret.
-int report_http_error(const httplib::Result& result, const std::string& what,
+int report_http_error(const HttpResult& result, const std::string& what,
                       const std::string& scene_name = "", const std::string* scene_text = nullptr);
 
 // `rayfarm render --server`: submits, shows progress, saves the image; Ctrl-C cancels.

@@ -581,6 +581,28 @@ TEST_F(RemoteCli, ExitCodesSayWhoseTroubleItIs) {
   EXPECT_FALSE(fs::exists(dir_ / "y.png"));
 }
 
+// The HTTP client is a module (client/http.h) found beside the program or in ../lib/rayfarm:
+// without it a local render works and talking to a server says what is missing.
+TEST_F(RemoteCli, TheHttpModuleIsNeededOnlyToTalkToAServer) {
+  REQUIRE_CLIENT();
+  const fs::path bin = dir_ / "bin", lib = dir_ / "lib" / "rayfarm";
+  fs::create_directories(bin);
+  fs::copy_file(kRayfarm, bin / "rayfarm");
+  const std::string alone = q((bin / "rayfarm").string());
+  Outcome local = run(alone + " render " + scene_ + " -q -o " + out("local.png") + " 2>&1");
+  EXPECT_EQ(local.code, 0) << local.out;
+  EXPECT_TRUE(is_png(dir_ / "local.png"));
+  const std::string nowhere = " --server http://127.0.0.1:1 -o " + out("x.png") + " 2>&1";
+  Outcome missing = run(alone + " render " + scene_ + nowhere);
+  EXPECT_EQ(missing.code, 3) << missing.out;
+  EXPECT_NE(missing.out.find("rayfarm-http.so is not installed"), std::string::npos) << missing.out;
+  fs::create_directories(lib);
+  fs::copy_file(RAYFARM_BINARY_DIR "/client/rayfarm-http.so", lib / "rayfarm-http.so");
+  Outcome installed = run(alone + " render " + scene_ + nowhere);
+  EXPECT_EQ(installed.code, 3) << installed.out;
+  EXPECT_NE(installed.out.find("cannot connect"), std::string::npos) << installed.out;
+}
+
 // docs/cli.md keeps up with --help: every option a command offers is in its section, and every
 // render option in the table of render options.
 TEST(DocsCli, EveryOptionOfEveryCommandIsDocumented) {
