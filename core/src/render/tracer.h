@@ -183,10 +183,11 @@ class Tracer {
   }
 
   // Whether anything lies at 0 < t < dist. Planes first: they are few and often block.
-  // `last_blocker` (optional) names a sphere to try first and learns the one that blocked:
-  // neighbouring shadow rays to one light are usually blocked by the same sphere. It can
-  // only make the answer come sooner, never change it. `light` (optional) is the buffer of
-  // the light at o + dist * d, for a shadow ray that ends there.
+  // `last_blocker` (optional) names a sphere or other shape (its object number) to try first
+  // and learns the one that blocked: neighbouring shadow rays to one light are usually
+  // blocked by the same object. It can only make the answer come sooner, never change it.
+  // `light` (optional) is the buffer of the light at o + dist * d, for a shadow ray that ends
+  // there.
   bool occluded(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist,
                 int* last_blocker = nullptr, const LightBuffer* light = nullptr) const {
     // The cell first: its entries load while the planes and the last blocker are tested.
@@ -197,14 +198,18 @@ class Tracer {
       const T t = plane_t(o, d, s_.planes[j], base + j, from);
       if (t > 0 && t < dist) return true;
     }
-    // Every kind is asked before "nothing in the way": the light buffer knows spheres only.
-    if (!s_.shapes.empty() && shape_blocks(o, d, from, dist)) return true;
     auto blocks = [&](int i) {
       const PreparedSphere<T>& sp = s_.spheres[i];
       const T t = sphere_t(o, d, sp.centre, sp.radius, i, from);
       return t > 0 && t < dist;
     };
-    if (last_blocker && *last_blocker >= 0 && blocks(*last_blocker)) return true;
+    if (last_blocker && *last_blocker >= 0) {
+      const int last = *last_blocker;
+      if (last < base ? blocks(last) : shape_blocks_one(last - s_.shape_base(), o, d, from, dist))
+        return true;
+    }
+    // Every kind is asked before "nothing in the way": the light buffer knows spheres only.
+    if (!s_.shapes.empty() && shape_blocks(o, d, from, dist, last_blocker)) return true;
     if (buffered) {
       for (std::int32_t i : light->around)
         if (blocks(i)) return remember(last_blocker, i);
@@ -266,8 +271,8 @@ class Tracer {
 
   bool recording() const { return kRecord && rec_; }
 
-  static bool remember(int* last_blocker, int sphere) {
-    if (last_blocker) *last_blocker = sphere;
+  static bool remember(int* last_blocker, int object) {
+    if (last_blocker) *last_blocker = object;
     return true;
   }
 
@@ -290,11 +295,18 @@ class Tracer {
     for (int k = 0; k < static_cast<int>(s_.shapes.size()); ++k) test(k);
   }
 
-  bool shape_blocks(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist) const {
+  // Whether shape k (not an object number) lies at 0 < t < dist.
+  bool shape_blocks_one(int k, const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist) const {
+    const T t = shape_t(s_.shapes[k], o, d, s_.shape_base() + k, from);
+    return t > 0 && t < dist;
+  }
+
+  // Whether any shape does; the one that does goes to `last_blocker` (optional).
+  bool shape_blocks(const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist,
+                    int* last_blocker = nullptr) const {
     const int base = s_.shape_base();
     auto blocks = [&](int k) {
-      const T t = shape_t(s_.shapes[k], o, d, base + k, from);
-      return t > 0 && t < dist;
+      return shape_blocks_one(k, o, d, from, dist) && remember(last_blocker, base + k);
     };
     BvhRay ray;
     if (!s_.shape_bvh.empty() && ray.init(o, d, s_.shape_bvh.scale))
@@ -508,7 +520,7 @@ class Tracer {
     const Vec3<T> ap = glm::abs(p);
     const T point_scale = std::max({ap.x, ap.y, ap.z});
     if (blockers_.size() != s_.lights.size()) blockers_.assign(s_.lights.size(), -1);
-    const bool remember = !s_.bvh.empty();  // small scenes: just loop
+    const bool remember = !s_.bvh.empty() || !s_.shape_bvh.empty();  // small scenes: just loop
     for (std::size_t i = 0; i < s_.lights.size(); ++i) {
       const PreparedLight<T>& light = s_.lights[i];
       RecordedLight* lr = recording()
@@ -695,7 +707,7 @@ class Tracer {
   const PreparedScene<T>& s_;
   std::vector<Level> levels_;
   std::vector<PendingRay> pending_;
-  std::vector<int> blockers_;  // per light: the sphere that blocked its last shadow ray
+  std::vector<int> blockers_;  // per light: the object that blocked its last shadow ray
   Recorder* rec_ = nullptr;    // only with kRecord
 };
 
