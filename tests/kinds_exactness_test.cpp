@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -371,6 +372,77 @@ TEST(KindsExactness, ShapeBinsHoldEveryPixelAShapeTestHits) {
       expect_shape_bins_hold_every_hit<double>(scene, 40, 30, 3);
     }
   }
+}
+
+// revsurf_t's first test, a sphere around the surface's cylinder, never drops a crossing:
+// against the same surface without it, on rays aimed at the surface (grazing it, leaving it)
+// and at the sphere's rim, from near and from far, in double and float.
+template <class T>
+void expect_bound_drops_no_crossing(std::uint64_t seed) {
+  Rng rng(seed);
+  int tested = 0, culled = 0, hits = 0, rim_hits = 0;
+  for (int round = 0; round < 40; ++round) {
+    const Scene scene = kinds_scene(rng, false);
+    const PreparedScene<T> p = prepare_scene<T>(scene, RenderOptions{}, 0);
+    for (const PreparedShape<T>& s : p.shapes) {
+      if (s.kind != PreparedShape<T>::revsurf) continue;
+      PreparedShape<T> unbounded = s;
+      unbounded.bound_radius = std::numeric_limits<double>::infinity();
+      const glm::dvec3 axis(s.normal), base(s.point);
+      const double top = revsurf_top(s.surfer, static_cast<double>(s.height));
+      for (int i = 0; i < 2000; ++i) {
+        const double far = rng.chance(0.2) ? std::pow(2.0, rng.in(5, 40)) : rng.in(0.5, 20);
+        const glm::dvec3 o = s.bound_centre + far * rng.direction();
+        // A target on the surface (nudged in or out by up to 2^-30 of its radius), or on
+        // the bounding sphere's rim.
+        glm::dvec3 target;
+        const bool rim = rng.chance(0.3);
+        if (rim) {
+          const glm::dvec3 to = glm::normalize(s.bound_centre - o);
+          glm::dvec3 side = glm::normalize(glm::cross(to, rng.direction()));
+          target = s.bound_centre + s.bound_radius * (1 + rng.in(-1e-6, 1e-6)) * side;
+        } else {
+          const double y = rng.in(0, top);
+          glm::dvec3 u = glm::normalize(glm::cross(axis, rng.direction()));
+          const double r = revsurf_radius(s.surfer, y) * (1 + rng.in(-0x1p-30, 0x1p-30));
+          target = base + y * axis + r * u;
+        }
+        glm::dvec3 d = rng.chance(0.25) ? rng.direction() : target - o;  // or anywhere
+        glm::dvec3 start = o;
+        if (!rim && rng.chance(0.3)) {
+          // Through the rim of one end of the surface, the part nearest the sphere, along
+          // the sphere's own tangent plane there: the sharpest test of its radius.
+          const double y = rng.chance(0.5) ? 0 : top;
+          glm::dvec3 u = glm::normalize(glm::cross(axis, rng.direction()));
+          target = base + y * axis + revsurf_radius(s.surfer, y) * (1 - 0x1p-30) * u;
+          d = glm::normalize(glm::cross(target - s.bound_centre, rng.direction()));
+          start = target - far * d;
+        }
+        if (rng.chance(0.3)) d *= std::pow(2.0, rng.in(-30, 30));
+        const Vec3<T> ot(start), dt(d);
+        const bool own = !rim && rng.chance(0.2);
+        const Vec3<T> from = own ? Vec3<T>(target) : ot;
+        const T a = revsurf_t(s, from, dt, own), b = revsurf_t(unbounded, from, dt, own);
+        ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0)
+            << "shape surfer " << s.surfer << ", ray " << i << ": " << a << " against " << b;
+        ++tested;
+        culled += !(a > 0) && glm::length(glm::cross(s.bound_centre - glm::dvec3(from),
+                                                     glm::normalize(glm::dvec3(dt)))) >
+                                  s.bound_radius;
+        hits += b > 0;
+        rim_hits += rim && b > 0;
+      }
+    }
+  }
+  EXPECT_GT(tested, 20000);
+  EXPECT_GT(culled, tested / 20) << "the rays must also pass wide of the sphere";
+  EXPECT_GT(hits, tested / 4);
+  EXPECT_GT(rim_hits, 0) << "some rays through the rim must still meet the surface";
+}
+
+TEST(KindsExactness, TheRevsurfBoundDropsNoCrossing) {
+  expect_bound_drops_no_crossing<double>(41);
+  expect_bound_drops_no_crossing<float>(42);
 }
 
 TEST(KindsExactness, ConesTallerThanTheirApexEqualTheLoop) {

@@ -94,6 +94,12 @@ struct ShapeMaker {
     s.normal = narrow<T>(glm::normalize(r.direction));
     s.height = narrow<T>(r.height);
     s.surfer = r.surfer;
+    // Around the cylinder of the part that exists, from the prepared (rounded) values the
+    // search itself uses.
+    const double top = revsurf_top(s.surfer, static_cast<double>(s.height));
+    const double rmax = revsurf_max_radius(s.surfer, top);
+    s.bound_centre = glm::dvec3(s.point) + (top / 2) * glm::dvec3(s.normal);
+    s.bound_radius = std::sqrt(top * top / 4 + rmax * rmax);
     return s;
   }
   template <class Other>

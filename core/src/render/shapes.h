@@ -41,6 +41,9 @@ struct PreparedShape {
   T pixel_w = 1, pixel_h = 1;  // mode 1: a texel's size in the world
   // revsurf: the axis through `point` along the unit `normal`, from 0 to `height`
   int surfer = 1;
+  // revsurf: a sphere around the part of its cylinder that exists (revsurf_t's first test)
+  glm::dvec3 bound_centre{0};
+  double bound_radius = std::numeric_limits<double>::infinity();
 };
 
 // Frame coordinates of p on a planar shape.
@@ -56,7 +59,23 @@ inline void frame_coords(const PreparedShape<T>& s, const Vec3<T>& p, T& qx, T& 
 // the other side counts, so no offset is needed at any scale.
 template <class T>
 T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool own) {
-  const glm::dvec3 a(s.normal), q = glm::dvec3(o) - glm::dvec3(s.point), dd(d);
+  const glm::dvec3 dd(d);
+  {
+    // Most rays pass wide of the surface, or it lies behind them: said in world space, before
+    // the change of frame and the search. The sphere is widened by 2^-20 of the distances
+    // involved, far more than the rounding of this test and of the search together, so it
+    // never drops a crossing the search would find; lengths far from 1 skip it.
+    const glm::dvec3 oc = s.bound_centre - glm::dvec3(o);
+    const double occ = glm::dot(oc, oc), ddd = glm::dot(dd, dd);
+    if (occ < 1e100 && ddd > 1e-100 && ddd < 1e100) {
+      const double rm = s.bound_radius + 0x1p-20 * (std::sqrt(occ) + s.bound_radius);
+      const glm::dvec3 x = glm::cross(oc, dd);
+      const double along = glm::dot(oc, dd);
+      if (glm::dot(x, x) > rm * rm * ddd || (along < 0 && along * along > rm * rm * ddd))
+        return T(-1);
+    }
+  }
+  const glm::dvec3 a(s.normal), q = glm::dvec3(o) - glm::dvec3(s.point);
   const double y0 = glm::dot(q, a), dy = glm::dot(dd, a);
   const glm::dvec3 r0 = q - y0 * a, rd = dd - dy * a;
   const RevsurfRay ray{y0, dy, glm::dot(r0, r0), glm::dot(r0, rd), glm::dot(rd, rd)};
