@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <mutex>
 #include <new>
 
 namespace {
@@ -29,26 +30,83 @@ constexpr std::size_t kHeader = 64;
 // land there once in 100,000.
 std::atomic<void*> live[1024];
 
-void* map_large(std::size_t size) {
-  if (size > (std::size_t{1} << 46)) return nullptr;
-  const std::size_t length = (size + kHeader + kHuge - 1) & ~(kHuge - 1);
+// Freed mappings kept for the next large blocks. Their pages are faulted in already: on the
+// virtual machines measured, a fresh page costs about 1 ms per MB to fault in and clear, more
+// than building the hierarchy over what it holds. Loading a large scene frees arrays (the
+// two halves of the file's objects, the hierarchy's build arrays, the light buffers' sorting)
+// that the next steps can fill instead. A spare larger than asked for is cut at a 2 MB
+// boundary and the rest kept. Kept while the program runs: a command's whole life.
+struct Spare {
+  std::uintptr_t base;
+  std::size_t length;
+};
+constexpr int kMaxSpares = 64;
+constexpr std::size_t kMaxSpareBytes = std::size_t{1} << 30;
+std::mutex spare_mutex;
+Spare spares[kMaxSpares];
+int spare_count = 0;
+std::size_t spare_bytes = 0;
+
+// The start of `length` bytes cut from the smallest spare that holds them; 0 if none does.
+std::uintptr_t take_spare(std::size_t length) {
+  std::lock_guard lock(spare_mutex);
+  int best = -1;
+  for (int i = 0; i < spare_count; ++i)
+    if (spares[i].length >= length && (best < 0 || spares[i].length < spares[best].length))
+      best = i;
+  if (best < 0) return 0;
+  const std::uintptr_t base = spares[best].base;
+  spare_bytes -= length;
+  if (spares[best].length > length) {
+    spares[best].base += length;
+    spares[best].length -= length;
+  } else {
+    spares[best] = spares[--spare_count];
+  }
+  return base;
+}
+
+// Keeps a freed mapping for reuse; false when there is no room (the caller unmaps it).
+bool keep_spare(std::uintptr_t base, std::size_t length) {
+  std::lock_guard lock(spare_mutex);
+  if (spare_count == kMaxSpares || spare_bytes + length > kMaxSpareBytes) return false;
+  spares[spare_count++] = {base, length};
+  spare_bytes += length;
+  return true;
+}
+
+// A fresh 2 MB-aligned mapping of `length` bytes marked for huge pages; 0 on failure.
+std::uintptr_t map_fresh(std::size_t length) {
   // Map 2 MB more than needed and cut an aligned range out of it.
   void* raw = mmap(nullptr, length + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
                    -1, 0);
-  if (raw == MAP_FAILED) return nullptr;
+  if (raw == MAP_FAILED) return 0;
   const std::uintptr_t start = reinterpret_cast<std::uintptr_t>(raw);
   const std::uintptr_t base = (start + kHuge - 1) & ~(kHuge - 1);
   if (base > start) munmap(raw, base - start);
   if (const std::uintptr_t end = start + length + kHuge; end > base + length)
     munmap(reinterpret_cast<void*>(base + length), end - (base + length));
   madvise(reinterpret_cast<void*>(base), length, MADV_HUGEPAGE);
+  return base;
+}
+
+void release_mapping(std::uintptr_t base, std::size_t length) {
+  if (!keep_spare(base, length)) munmap(reinterpret_cast<void*>(base), length);
+}
+
+void* map_large(std::size_t size) {
+  if (size > (std::size_t{1} << 46)) return nullptr;
+  const std::size_t length = (size + kHeader + kHuge - 1) & ~(kHuge - 1);
+  std::uintptr_t base = take_spare(length);
+  if (!base) base = map_fresh(length);
+  if (!base) return nullptr;
   *reinterpret_cast<std::size_t*>(base) = length;
   void* p = reinterpret_cast<void*>(base + kHeader);
   for (auto& slot : live) {
     void* empty = nullptr;
     if (slot.compare_exchange_strong(empty, p, std::memory_order_acq_rel)) return p;
   }
-  munmap(reinterpret_cast<void*>(base), length);  // too many at once: malloc's turn
+  release_mapping(base, length);  // too many at once: malloc's turn
   return nullptr;
 }
 
@@ -58,8 +116,8 @@ bool unmap_large(void* p) {
     void* mine = p;
     if (slot.load(std::memory_order_relaxed) == p &&
         slot.compare_exchange_strong(mine, nullptr, std::memory_order_acq_rel)) {
-      char* base = static_cast<char*>(p) - kHeader;
-      munmap(base, *reinterpret_cast<std::size_t*>(base));
+      const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(p) - kHeader;
+      release_mapping(base, *reinterpret_cast<std::size_t*>(base));
       return true;
     }
   }
@@ -81,6 +139,17 @@ void release(void* p) noexcept {
 }
 
 }  // namespace
+
+namespace rayfarm::large_pages {
+// For tests: unmaps every spare, so that what follows sees only its own.
+void drop_spares() {
+  std::lock_guard lock(spare_mutex);
+  for (int i = 0; i < spare_count; ++i)
+    munmap(reinterpret_cast<void*>(spares[i].base), spares[i].length);
+  spare_count = 0;
+  spare_bytes = 0;
+}
+}  // namespace rayfarm::large_pages
 
 void* operator new(std::size_t n) { return allocate(n, alignof(std::max_align_t)); }
 void* operator new[](std::size_t n) { return allocate(n, alignof(std::max_align_t)); }

@@ -10,6 +10,10 @@
 #include <thread>
 #include <vector>
 
+namespace rayfarm::large_pages {
+void drop_spares();
+}
+
 namespace {
 
 constexpr std::size_t kMiB = std::size_t{1} << 20;
@@ -24,6 +28,31 @@ TEST(LargePages, LargeBlocksStart64BytesIntoA2MiBAlignedMapping) {
     EXPECT_EQ(p[size - 1], 0x5a);
     ::operator delete(p);
   }
+}
+
+// A freed large block's mapping is kept, its pages faulted in already, and the next large
+// blocks are cut from it: the smallest spare that holds them, at 2 MB boundaries.
+TEST(LargePages, FreedMappingsAreCutForTheNextLargeBlocks) {
+  rayfarm::large_pages::drop_spares();  // other tests' blocks
+  char* big = static_cast<char*>(::operator new(100 * kMiB));  // a 102 MB mapping
+  big[0] = big[100 * kMiB - 1] = 1;
+  const std::uintptr_t base = address(big) - 64;
+  ::operator delete(big);
+  char* a = static_cast<char*>(::operator new(70 * kMiB));  // its first 72 MB
+  char* b = static_cast<char*>(::operator new(20 * kMiB));  // 22 of the 30 MB left
+  EXPECT_EQ(address(a) - 64, base);
+  EXPECT_EQ(address(b) - 64, base + 72 * kMiB);
+  std::memset(a, 2, 70 * kMiB);
+  std::memset(b, 3, 20 * kMiB);
+  EXPECT_EQ(a[70 * kMiB - 1], 2);
+  EXPECT_EQ(b[0], 3);
+  ::operator delete(a);
+  ::operator delete(b);
+  // Freed again, each piece is a spare of its own: 60 MB fits a's 72, not b's 22 or the 8.
+  char* c = static_cast<char*>(::operator new(60 * kMiB));
+  EXPECT_EQ(address(c) - 64, base);
+  ::operator delete(c);
+  rayfarm::large_pages::drop_spares();
 }
 
 TEST(LargePages, BlocksBelow1MiBComeFromMalloc) {
