@@ -3,11 +3,14 @@
 // megabytes each (the text, the objects, the hierarchy and its build arrays, the bins and
 // buffers), each touched once: in 4 KB pages that is some 25,000 page faults, which on the
 // virtual machines measured cost more than parsing the file (random-100k 0.63 -> 0.46 s).
-// A block of 1 MB or more gets a mapping of its own, a multiple of 2 MB aligned to 2 MB and
+// A block of 256 KB or more gets a mapping of its own, a multiple of 2 MB aligned to 2 MB and
 // marked MADV_HUGEPAGE (transparent huge pages in `madvise` mode, Debian's default), so it
-// faults once per 2 MB; smaller ones go to malloc as before. From 1 MB, not 2: an 800x600
-// image (1.44 MB, written once by the render and once by the PNG encoder) took 4.2 ms to
-// touch in 4 KB pages there and 0.2 ms in one huge page, a tenth of the lecture scene's run.
+// faults once per 2 MB; smaller ones go to malloc as before. From 256 KB, not 2 MB: an
+// 800x600 image (1.44 MB) took 4.2 ms to touch in 4 KB pages there and 0.2 ms in one huge
+// page, a tenth of the lecture scene's run, and the preparation's arrays of a few hundred
+// KB (a rectangle per sphere, a distance per sphere) cost grid-8000 and random-100k 8-15%
+// of their runs in 4 KB faults. The rounding up to 2 MB is not lost: freed, a mapping is
+// kept for the next blocks (below).
 #include <sys/mman.h>
 
 #include <atomic>
@@ -20,7 +23,7 @@
 namespace {
 
 constexpr std::size_t kHuge = std::size_t{1} << 21;
-constexpr std::size_t kMinBlock = std::size_t{1} << 20;
+constexpr std::size_t kMinBlock = std::size_t{1} << 18;
 // The block starts this far into its mapping, where the mapping's length is kept; it also
 // keeps every alignment up to 64 (the hierarchy's nodes ask for 64).
 constexpr std::size_t kHeader = 64;
