@@ -4,9 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <memory>
 #include <new>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -69,6 +72,31 @@ TEST(LargePages, BlocksBelow256KiBComeFromMalloc) {
     EXPECT_LT(mapped, 3) << size;
     for (void* b : blocks) ::operator delete(b);
   }
+}
+
+// The small blocks' heap is marked for huge pages from the start (VmFlags "hg" in smaps).
+TEST(LargePages, SmallBlocksComeFromAHeapMarkedForHugePages) {
+  // 8 MB of them: past the heap's first 2 MB boundary, where the marked range starts.
+  std::vector<std::unique_ptr<char[]>> blocks;
+  for (int i = 0; i < 40000; ++i) blocks.push_back(std::make_unique<char[]>(200));
+  const std::uintptr_t at = address(blocks.back().get());
+  std::ifstream smaps("/proc/self/smaps");
+  ASSERT_TRUE(smaps) << "no /proc/self/smaps";
+  std::string line;
+  bool inside = false, found = false;
+  while (std::getline(smaps, line)) {
+    std::uintptr_t lo = 0, hi = 0;
+    if (std::sscanf(line.c_str(), "%lx-%lx ", &lo, &hi) == 2) {  // a mapping's first line
+      inside = lo <= at && at < hi;
+      continue;
+    }
+    if (inside && line.rfind("VmFlags:", 0) == 0) {
+      EXPECT_NE(line.find(" hg"), std::string::npos) << line;
+      found = true;
+      break;
+    }
+  }
+  EXPECT_TRUE(found) << "the block's mapping is not in smaps";
 }
 
 TEST(LargePages, EverySizeAndAlignmentIsUsable) {
