@@ -69,11 +69,13 @@ std::optional<T> plane_distance(const Vec3<T>& o, const Vec3<T>& d, const Vec3<T
 
 // plane_distance when it is finite and > 0, else -1; the same t, but a plane behind the ray
 // (numerator and denominator of opposite signs: most shadow and reflected rays off a floor)
-// costs no division, the slowest step of the test.
+// costs no division, the slowest step of the test. `num` (optional) gets n · (point − o).
 template <class T>
-T plane_distance_ahead(const Vec3<T>& o, const Vec3<T>& d, const Vec3<T>& n, const Vec3<T>& point) {
+T plane_distance_ahead(const Vec3<T>& o, const Vec3<T>& d, const Vec3<T>& n, const Vec3<T>& point,
+                       T* num_out = nullptr) {
   const T denom = glm::dot(n, d);
   const T num = glm::dot(n, point - o);
+  if (num_out) *num_out = num;
   // A quotient > 0 needs both > 0 or both < 0; a zero or NaN fails both.
   if (!(num > 0 ? denom > 0 : num < 0 && denom < 0)) return T(-1);
   const T t = num / denom;

@@ -243,9 +243,13 @@ std::vector<unsigned char> encode_png(const Image& image) {
   const std::size_t bound = libdeflate_zlib_compress_bound(compressor.get(), filtered_size);
   constexpr std::size_t kHeader = 8 + 12 + 13 + 8;  // signature, IHDR, IDAT's length and type
   std::vector<unsigned char> png(kHeader + bound + 4 + 12);
+  auto store32 = [](unsigned char* at, std::uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) *at++ = static_cast<unsigned char>(v >> shift);
+  };
   unsigned char* o = png.data();
-  auto put32 = [&o](std::uint32_t v) {
-    for (int shift = 24; shift >= 0; shift -= 8) *o++ = static_cast<unsigned char>(v >> shift);
+  auto put32 = [&o, &store32](std::uint32_t v) {
+    store32(o, v);
+    o += 4;
   };
   // A chunk's CRC covers its type and data, from `type` up to where `o` is now.
   auto put_crc = [&o, &put32](const unsigned char* type) {
@@ -271,11 +275,8 @@ std::vector<unsigned char> encode_png(const Image& image) {
       libdeflate_zlib_compress(compressor.get(), filtered.data(), filtered_size, o, bound);
   if (zlen == 0) throw std::bad_alloc();  // within the bound it cannot fail
   o += zlen;
+  store32(length, static_cast<std::uint32_t>(zlen));
   put_crc(type);
-  unsigned char* end = o;
-  o = length;
-  put32(static_cast<std::uint32_t>(zlen));
-  o = end;
   put32(0);
   type = o;
   o = std::copy_n("IEND", 4, o);

@@ -83,20 +83,31 @@ T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool 
   return t > 0 ? static_cast<T>(t) : T(-1);
 }
 
+// Distance to the plane through `point` with unit normal n, ahead of a ray from o, or -1.
+// A secondary ray that starts in the plane (within rounding) cannot meet it: it is the ray's
+// own surface or a coplanar neighbour. Planes and every planar shape use it.
+template <class T>
+[[gnu::always_inline]] inline T plane_ahead_t(const Vec3<T>& o, const Vec3<T>& d,
+                                              const Vec3<T>& n, const Vec3<T>& point,
+                                              bool secondary) {
+  T num;
+  const T t = plane_distance_ahead(o, d, n, point, &num);
+  if (!(t > 0)) return T(-1);
+  if (secondary) {
+    const Vec3<T> a = glm::abs(o), b = glm::abs(point);
+    const T scale = std::max({a.x, a.y, a.z, b.x, b.y, b.z});
+    if (std::abs(num) <= 32 * std::numeric_limits<T>::epsilon() * scale) return T(-1);
+  }
+  return t;
+}
+
 // Where a ray leaving `from` meets shape `index` (its object number), or a value not > 0.
 template <class T>
 T shape_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, int index, Origin from) {
   if (s.kind == PreparedShape<T>::revsurf) return revsurf_t(s, o, d, index == from.object);
   if (index == from.object) return T(-1);  // flat: never met again by a ray leaving it
-  const T t = plane_distance_ahead(o, d, s.normal, s.point);
+  const T t = plane_ahead_t(o, d, s.normal, s.point, from.object >= 0);
   if (!(t > 0)) return T(-1);
-  if (from.object >= 0) {
-    // A ray that starts in this shape's plane (a coplanar neighbour) cannot hit it.
-    const Vec3<T> a = glm::abs(o), b = glm::abs(s.point);
-    const T scale = std::max({a.x, a.y, a.z, b.x, b.y, b.z});
-    if (std::abs(glm::dot(s.normal, s.point - o)) <= 32 * std::numeric_limits<T>::epsilon() * scale)
-      return T(-1);
-  }
   T qx, qy;
   frame_coords(s, o + t * d, qx, qy);
   if (s.kind == PreparedShape<T>::triangle) {

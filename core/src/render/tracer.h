@@ -52,22 +52,12 @@ template <class T>
   return roots->near > 0 ? roots->near : roots->far;
 }
 
-// Distance to a plane ahead of the ray, or -1. A secondary ray that starts on the plane
-// (within rounding) cannot hit it: it is the ray's own surface or one coincident with it.
+// Distance to a plane ahead of the ray, or -1 (plane_ahead_t, shapes.h).
 template <class T>
 [[gnu::always_inline]] inline T plane_t(const Vec3<T>& o, const Vec3<T>& d,
                                         const PreparedPlane<T>& plane, int index, Origin from) {
   if (index == from.object) return T(-1);
-  const T t = plane_distance_ahead(o, d, plane.normal, plane.point);
-  if (!(t > 0)) return T(-1);
-  if (from.object >= 0) {
-    const Vec3<T> a = glm::abs(o), b = glm::abs(plane.point);
-    const T scale = std::max({a.x, a.y, a.z, b.x, b.y, b.z});
-    if (std::abs(glm::dot(plane.normal, plane.point - o)) <=
-        32 * std::numeric_limits<T>::epsilon() * scale)
-      return T(-1);
-  }
-  return t;
+  return plane_ahead_t(o, d, plane.normal, plane.point, from.object >= 0);
 }
 
 template <class T>
