@@ -61,31 +61,91 @@ inline double bisect(const F& f, double a, double b, double fa, int steps = 200)
   return b;
 }
 
+// How far fl(f) can lie from f in real arithmetic, for the two certificates below.
+//
+// Let f* be f in real arithmetic (the libm sine replaced by the true one; the cone's 2/3 is
+// the double c = fl(2/3) that f multiplies by). For x >= 0, with p1 = fl(x rdd), p3 =
+// fl(x fl(2 r0d + p1)) and q = fl(rr + p3) as f computes them, and Y = |y0| + x |dy|,
+// |fl(f(x)) − f*(x)| <= E(x) = u (2.5 |q| + 2.5 |p3| + 1.5 x p1 + K), u = 2^-53, where
+// K = 16 + 4 Y for the waves and K = 10 (4 + Y)² for the cone. The quadratic errs by at most
+// u (1.001 |q| + 2.001 |p3| + x² rdd) (each operation by u times its result, carried through
+// the products by x), and y = fl(y0 + fl(x dy)) by Δy <= 2.01u Y. The waves: the last
+// subtraction errs by u (|q| + 2.26); r² by 2.25u + 3.01 (2u + Δy/2), r's rounding u plus half
+// of the sine's error, taken as 2u (one ulp is at most u, as |sin| <= 1). In all at most
+// u (2.001 |q| + 2.001 |p3| + x² rdd + 10.52 + 3.04 Y). The cone, with R = 4 + Y >= |r|:
+// fl(c y) errs by 2.01u Y, r = fl(4 − fl(c y)) by u (2.01 Y + R) <= 3.01u R, r² by 6.03u R²
+// and its rounding u R², the last subtraction by u (|q| + 1.01 R²): in all at most
+// u (2.001 |q| + 2.001 |p3| + x² rdd + 8.05 R²). E's constants exceed those by a fifth and
+// more, which covers E's own rounding (a few u, relative) and the difference between the
+// computed q, p3 and exact ones. Over [x, x + w], |q| and |p3| grow by at most |q'| w <=
+// 2 (|r0d| + (x + w) rdd) w, and the other terms are largest at x + w: over() bounds E there.
+//
+// |f*''| <= M2 = 2 rdd + 2 dy²: r²'' = dy² (sin²/2 − r cos) for a wave (or its twin), at most
+// 2 dy², and 2 c² dy² for the cone. So if f*(A) lies within rA of cA and f*(B) within rB of
+// cB, then at t = A + λ (B − A), f*(t) lies within (1 − λ) rA + λ rB + M2 (t − A)(B − t)/2 of
+// L(t) = (1 − λ) cA + λ cB: between two lines, the lower from cA − rA to cB − rB, the upper
+// from cA + rA to cB + rB, widened by M2 (B − A)²/8. Where the lower line exceeds that
+// widening plus E's bound over [A, B], fl(f(t)) > 0; where the upper one is below minus that,
+// fl(f(t)) < 0 (the margin D also takes 2u (|cA| + rA + |cB| + rB) for the rounding of the
+// lines' ends). `trust` < 1 shrinks D: for tests only, to show that a wrong bound changes
+// answers.
+struct RoundingBound {
+  static constexpr double u = 0x1p-53, slack = 1 + 0x1p-40;
+  const RevsurfRay& r;
+  bool cone;
+  double trust;
+  double ay0 = std::abs(r.y0), ady = std::abs(r.dy), a2r0d = 2 * std::abs(r.r0d);
+  double m2_8 = 0.125 * slack * 2 * (r.rdd + r.dy * r.dy + 0x1p-1000);
+
+  double k_term(double y) const { return cone ? 10 * (4 + y) * (4 + y) : 16 + 4 * y; }
+  // E(x).
+  double at(double x) const {
+    const double p1 = x * r.rdd, p3 = x * (2 * r.r0d + p1), q = r.rr + p3;
+    return u * (2.5 * (std::abs(q) + std::abs(p3)) + 1.5 * x * p1 + k_term(ay0 + x * ady));
+  }
+  // E's bound over [x, x + w].
+  double over(double x, double w) const {
+    const double p1 = x * r.rdd, p3 = x * (2 * r.r0d + p1), q = r.rr + p3, xe = x + w;
+    return u * (2.5 * (std::abs(q) + std::abs(p3)) + 5 * (a2r0d + 2 * xe * r.rdd) * w +
+                1.5 * xe * (xe * r.rdd) + k_term(ay0 + xe * ady));
+  }
+  // D for [a, a + w] with the enclosures ca ± ra and cb ± rb at its ends.
+  double margin(double a, double w, double ca, double ra, double cb, double rb) const {
+    return trust * slack *
+           (m2_8 * w * w + over(a, w) + 2 * u * (std::abs(ca) + ra + std::abs(cb) + rb));
+  }
+};
+
+// Whether fl(f) certainly keeps the sign it has at t (f(t) = v) at every x in [t, hi]: then
+// the stepping below meets no change of sign there and returns -1. Rays leaving a surface
+// mostly go away from it, where that is shown in a few intervals, each as wide as the
+// curvature term allows (a quarter of the margin |v| − E): a handful of evaluations instead
+// of a step each |v|/L. False when it cannot show it (the search then runs as before).
+template <class F>
+inline bool certainly_no_crossing(const F& f, const RoundingBound& bound, double t, double v,
+                                  double hi) {
+  const bool positive = v > 0;
+  double x = t, cx = v, rx = bound.at(t);
+  for (int i = 0; i < 12; ++i) {
+    const double room = std::abs(cx) - rx;
+    if (!(room > 0)) return false;
+    const double step = std::sqrt(0.25 * room / bound.m2_8);
+    const bool last = !(x + step < hi);
+    const double z = last ? hi : x + step, w = z - x;
+    const double cz = f(z), rz = bound.at(z);
+    const double D = bound.margin(x, w, cx, rx, cz, rz);
+    if (positive ? !(cx - rx > D && cz - rz > D) : !(cx + rx < -D && cz + rz < -D)) return false;
+    if (last) return true;
+    x = z, cx = cz, rx = rz;
+  }
+  return false;
+}
+
 // The same bisection for the two waves (r = 1 + cos(y)/2 or 1 + sin(y)/2), the same midpoints
-// and the same answer, with a sine only where the sign of fl(f(m)) is not certain otherwise.
-//
-// Let f* be f in real arithmetic (the libm sine replaced by the true one). For x >= 0, with
-// p1 = fl(x rdd), p3 = fl(x fl(2 r0d + p1)) and q = fl(rr + p3) as f computes them,
-// |fl(f(x)) − f*(x)| <= E(x) = u (2.5 |q| + 2.5 |p3| + 1.5 x p1 + 16 + 4 (|y0| + x |dy|)),
-// u = 2^-53: the quadratic errs by at most u (1.001 |q| + 2.001 |p3| + x² rdd) (each
-// operation by u times its result, carried through the products by x); the last subtraction
-// by u (|q| + 2.26); r² by 2.25u + 3.01 (2u + Δy/2), r's rounding u plus half of the sine's
-// error, taken as 2u (one ulp is at most u, as |sin| <= 1), and its argument's error Δy <=
-// 2.01u (|y0| + x |dy|). In all at most u (2.001 |q| + 2.001 |p3| + x² rdd + 10.52 + 3.04
-// (|y0| + x |dy|)); E's constants exceed those by a fifth and more, which covers E's own
-// rounding (a few u, relative) and the difference between the computed q, p3 and exact ones.
-// Over [x, x + w], |q| and |p3| grow by at most |q'| w <= 2 (|r0d| + (x + w) rdd) w, and the
-// other terms are largest at x + w: error_over() bounds E there.
-//
-// |f*''| <= M2 = 2 rdd + 2 dy² (r²'' = dy² (cos²/2 − r sin), at most 2 dy²). If f*(A) lies
-// within rA of cA and f*(B) within rB of cB, then at t = A + λ (B − A), f*(t) lies within
-// (1 − λ) rA + λ rB + M2 (t − A)(B − t)/2 of L(t) = (1 − λ) cA + λ cB: between two lines, the
-// lower from cA − rA to cB − rB, the upper from cA + rA to cB + rB, widened by M2 (B − A)²/8.
-// Where the lower line exceeds that widening plus E's bound over [A, B], fl(f(t)) > 0; where
-// the upper one is below minus that, fl(f(t)) < 0 (the margin D also takes 2u (|cA| + rA +
-// |cB| + rB) for the rounding of the lines' ends). Near A that holds for t − A < d1, near B
-// for B − t < d2 (the lines are straight, so each region is an interval from its end), and
-// d1, d2 are computed short by 2^-40 relative, more than their rounding and that of t − A.
+// and the same answer, with a sine only where the sign of fl(f(m)) is not certain otherwise,
+// by RoundingBound's lines. Near A they give a certain sign for t − A < d1, near B for B − t
+// < d2 (the lines are straight, so each region is an interval from its end), and d1, d2 are
+// computed short by 2^-40 relative, more than their rounding and that of t − A.
 //
 // The bisection takes every midpoint in those regions with its certain sign: a subtraction
 // and a comparison. At a midpoint in neither, it derives the regions again from the bracket
@@ -97,21 +157,12 @@ inline double bisect(const F& f, double a, double b, double fa, int steps = 200)
 // fall), the plain bisection takes over for the steps left. Anything not finite (overflow,
 // NaN) leaves the regions empty, so f is evaluated, as before. `trust` < 1 shrinks the
 // margin: for tests only, to show that a wrong certificate changes answers.
-template <class F, class Ray>
-inline double bisect_wave(const F& f, const Ray& r, double a, double b, double fa, double fb,
-                          double trust) {
-  constexpr double u = 0x1p-53, slack = 1 + 0x1p-40, shrink = 1 - 0x1p-40;
-  const double ay0 = std::abs(r.y0), ady = std::abs(r.dy), a2r0d = 2 * std::abs(r.r0d);
-  const double m2_8 = 0.125 * slack * 2 * (r.rdd + r.dy * r.dy + 0x1p-1000);
-  auto error = [&](double x) {
-    const double p1 = x * r.rdd, p3 = x * (2 * r.r0d + p1), q = r.rr + p3;
-    return u * (2.5 * (std::abs(q) + std::abs(p3)) + 1.5 * x * p1 + 16 + 4 * (ay0 + x * ady));
-  };
-  auto error_over = [&](double x, double w) {
-    const double p1 = x * r.rdd, p3 = x * (2 * r.r0d + p1), q = r.rr + p3, xe = x + w;
-    return u * (2.5 * (std::abs(q) + std::abs(p3)) + 5 * (a2r0d + 2 * xe * r.rdd) * w +
-                1.5 * xe * (xe * r.rdd) + 16 + 4 * (ay0 + xe * ady));
-  };
+template <class F>
+inline double bisect_wave(const F& f, const RoundingBound& bound, double a, double b, double fa,
+                          double fb) {
+  constexpr double u = RoundingBound::u, slack = RoundingBound::slack, shrink = 1 - 0x1p-40;
+  const double m2_8 = bound.m2_8;
+  auto error = [&](double x) { return bound.at(x); };
   const bool neg_a = fa <= 0;
   // Enclosures at a and b (valid unless that end was reached by a certain sign since the
   // regions were derived), the regions' bracket [A, B] with its enclosures, and the regions.
@@ -121,9 +172,7 @@ inline double bisect_wave(const F& f, const Ray& r, double a, double b, double f
   auto derive = [&] {
     A = a, B = b, cA = ca, rA = ra, cB = cb, rB = rb;
     const double w = b - a;
-    const double D =
-        trust * slack *
-        (m2_8 * w * w + error_over(a, w) + 2 * u * (std::abs(ca) + ra + std::abs(cb) + rb));
+    const double D = bound.margin(a, w, ca, ra, cb, rb);
     const double lo_a = ca - ra, lo_b = cb - rb, up_a = ca + ra, up_b = cb + rb;
     d1 = d2 = -1;  // NaN anywhere leaves them so
     if (lo_a > D) {
@@ -235,9 +284,11 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
       slope_bound * std::abs(r.dy);
   const double min_step = (hi - lo) / 512;
   double t = lo, v = f(t);
+  const RoundingBound bound{r, surfer == 1, trust};
   if (own) {  // off the surface it starts on: the side the ray is on decides
     t = std::min(hi, lo + min_step);
     v = f(t);
+    if (certainly_no_crossing(f, bound, t, v, hi)) return -1;
   }
   for (int i = 0; i < 4096 && t < hi; ++i) {
     const double step = std::max(std::abs(v) / lipschitz, min_step);
@@ -245,7 +296,7 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
     const double w = f(next);
     if ((v <= 0) != (w <= 0)) {
       const double b =
-          surfer == 1 ? bisect(f, t, next, v) : bisect_wave(f, r, t, next, v, w, trust);
+          surfer == 1 ? bisect(f, t, next, v) : bisect_wave(f, bound, t, next, v, w);
       if (b > 0) return b;
     }
     t = next;
