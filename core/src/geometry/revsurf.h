@@ -6,7 +6,9 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 namespace rayfarm {
 
@@ -57,6 +59,37 @@ inline double bisect(const F& f, double a, double b, double fa, int steps = 200)
     } else {
       b = m;
     }
+  }
+  return b;
+}
+
+// The same bisection, two midpoints a round: f at the midpoint and at both midpoints it may
+// lead to, evaluated side by side, so that one evaluation's latency serves two steps. The
+// same midpoints decide, so the same answer; for an f of a few operations (the cone's), whose
+// time is the chain from one midpoint to the next.
+template <class F>
+inline double bisect_by_twos(const F& f, double a, double b, double fa, int steps = 200) {
+  const bool neg_a = fa <= 0;
+  // x if `take`, else y: a select, not a branch (the signs are a coin toss).
+  auto pick = [](bool take, double x, double y) {
+    const std::uint64_t mask = std::uint64_t{0} - take;
+    return std::bit_cast<double>((std::bit_cast<std::uint64_t>(x) & mask) |
+                                 (std::bit_cast<std::uint64_t>(y) & ~mask));
+  };
+  for (int k = 0; k < steps;) {
+    const double m = 0.5 * (a + b);
+    if (m <= a || m >= b) break;
+    const double left = 0.5 * (a + m), right = 0.5 * (m + b);
+    const double fm = f(m), fl = f(left), fr = f(right);
+    const bool up = neg_a == (fm <= 0);  // a moves to m, and the next midpoint is right
+    a = pick(up, m, a);
+    b = pick(up, b, m);
+    const double next = pick(up, right, left), fnext = pick(up, fr, fl);
+    if (++k == steps || next <= a || next >= b) break;
+    const bool up2 = neg_a == (fnext <= 0);
+    a = pick(up2, next, a);
+    b = pick(up2, b, next);
+    ++k;
   }
   return b;
 }
@@ -296,7 +329,7 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
     const double w = f(next);
     if ((v <= 0) != (w <= 0)) {
       const double b =
-          surfer == 1 ? bisect(f, t, next, v) : bisect_wave(f, bound, t, next, v, w);
+          surfer == 1 ? bisect_by_twos(f, t, next, v) : bisect_wave(f, bound, t, next, v, w);
       if (b > 0) return b;
     }
     t = next;
