@@ -282,9 +282,10 @@ inline double bisect_wave(const F& f, const RoundingBound& bound, double a, doub
   return b;
 }
 
-// revsurf_first_crossing below, with the certificate's `trust` of bisect_wave.
-inline double first_crossing(int surfer, double height, const RevsurfRay& r, bool own,
-                             double trust) {
+// revsurf_first_crossing below, with the certificates' `trust` (RoundingBound); `shown`
+// (tests) learns whether certainly_no_crossing gave the answer.
+inline double first_crossing(int surfer, double height, const RevsurfRay& r, bool own, double trust,
+                             bool* shown = nullptr) {
   height = revsurf_top(surfer, height);
   double lo = 0, hi = 1e300;
   if (r.dy != 0) {
@@ -321,7 +322,10 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
   if (own) {  // off the surface it starts on: the side the ray is on decides
     t = std::min(hi, lo + min_step);
     v = f(t);
-    if (certainly_no_crossing(f, bound, t, v, hi)) return -1;
+    if (certainly_no_crossing(f, bound, t, v, hi)) {
+      if (shown) *shown = true;
+      return -1;
+    }
   }
   for (int i = 0; i < 4096 && t < hi; ++i) {
     const double step = std::max(std::abs(v) / lipschitz, min_step);
