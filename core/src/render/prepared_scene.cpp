@@ -49,6 +49,7 @@ struct ShapeMaker {
     s.kind = kind;
     s.normal = narrow<T>(f.n);
     s.point = narrow<T>(plane.point);
+    s.point_scale = largest_coordinate(s.point);
     s.u = narrow<T>(f.u);
     s.v = narrow<T>(f.v);
     s.width = narrow<T>(w.width);
@@ -353,6 +354,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
       p.planes.push_back(pp);
     }
   }
+  for (PreparedPlane<T>& pl : p.planes) pl.point_scale = largest_coordinate(pl.point);
   for (const Object& o : scene.objects)
     if (auto shape = visit_shape(make, o.shape)) {
       shape->material = o.material;
@@ -360,11 +362,11 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     }
   bool any_light = false;
   for (const Light& l : scene.lights) {
-    const Vec3<T> location = narrow<T>(l.location), a = glm::abs(location);
+    const Vec3<T> location = narrow<T>(l.location);
     PreparedLight<T> pl;
     pl.location = location;
     pl.emissivity = narrow<T>(l.emissivity);
-    pl.scale = std::max({a.x, a.y, a.z});
+    pl.scale = largest_coordinate(location);
     pl.kind = l.kind;
     if (l.kind == LightKind::spot) {
       pl.direction = narrow<T>(glm::normalize(l.aim - l.location));

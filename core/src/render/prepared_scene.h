@@ -71,6 +71,7 @@ struct PreparedPlane {
   bool world_xz = false;
   Vec3<T> u{0}, v{0};
   T tile_w = 1, tile_h = 1;
+  T point_scale = 0;  // largest_coordinate(point), for plane_ahead_t: set it with `point`
 };
 
 template <class T>

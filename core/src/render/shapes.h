@@ -25,13 +25,21 @@ struct Origin {
   bool inside = false;
 };
 
+// The largest |coordinate| of v.
+template <class T>
+[[gnu::always_inline]] inline T largest_coordinate(const Vec3<T>& v) {
+  const Vec3<T> a = glm::abs(v);
+  return std::max({a.x, a.y, a.z});
+}
+
 template <class T>
 struct PreparedShape {
   enum Kind : std::uint8_t { finite_plane, tex_plane, triangle, revsurf } kind = finite_plane;
   int material = 0;
   // The planar kinds: a unit normal and a frame (u along xdir's part in the plane, v = n × u)
-  // with its origin at `point`.
+  // with its origin at `point`, and the largest |coordinate| of `point` (plane_ahead_t).
   Vec3<T> normal{0}, point{0}, u{0}, v{0};
+  T point_scale = 0;
   T width = 0, height = 0;
   // triangle: its vertices in that frame
   std::array<T, 3> tx{}, ty{};
@@ -85,17 +93,16 @@ T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool 
 
 // Distance to the plane through `point` with unit normal n, ahead of a ray from o, or -1.
 // A secondary ray that starts in the plane (within rounding) cannot meet it: it is the ray's
-// own surface or a coplanar neighbour. Planes and every planar shape use it.
+// own surface or a coplanar neighbour. `point_scale`: largest_coordinate(point), kept by the
+// preparation. Planes and every planar shape use it.
 template <class T>
-[[gnu::always_inline]] inline T plane_ahead_t(const Vec3<T>& o, const Vec3<T>& d,
-                                              const Vec3<T>& n, const Vec3<T>& point,
-                                              bool secondary) {
+[[gnu::always_inline]] inline T plane_ahead_t(const Vec3<T>& o, const Vec3<T>& d, const Vec3<T>& n,
+                                              const Vec3<T>& point, T point_scale, bool secondary) {
   T num;
   const T t = plane_distance_ahead(o, d, n, point, &num);
   if (!(t > 0)) return T(-1);
   if (secondary) {
-    const Vec3<T> a = glm::abs(o), b = glm::abs(point);
-    const T scale = std::max({a.x, a.y, a.z, b.x, b.y, b.z});
+    const T scale = std::max(largest_coordinate(o), point_scale);
     if (std::abs(num) <= 32 * std::numeric_limits<T>::epsilon() * scale) return T(-1);
   }
   return t;
@@ -106,7 +113,7 @@ template <class T>
 T shape_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, int index, Origin from) {
   if (s.kind == PreparedShape<T>::revsurf) return revsurf_t(s, o, d, index == from.object);
   if (index == from.object) return T(-1);  // flat: never met again by a ray leaving it
-  const T t = plane_ahead_t(o, d, s.normal, s.point, from.object >= 0);
+  const T t = plane_ahead_t(o, d, s.normal, s.point, s.point_scale, from.object >= 0);
   if (!(t > 0)) return T(-1);
   T qx, qy;
   frame_coords(s, o + t * d, qx, qy);

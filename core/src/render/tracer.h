@@ -57,7 +57,7 @@ template <class T>
 [[gnu::always_inline]] inline T plane_t(const Vec3<T>& o, const Vec3<T>& d,
                                         const PreparedPlane<T>& plane, int index, Origin from) {
   if (index == from.object) return T(-1);
-  return plane_ahead_t(o, d, plane.normal, plane.point, from.object >= 0);
+  return plane_ahead_t(o, d, plane.normal, plane.point, plane.point_scale, from.object >= 0);
 }
 
 template <class T>
@@ -507,8 +507,7 @@ class Tracer {
     const PreparedMaterial<T>& m = *sf.m;
     const Vec3<T>& n = sf.n;
     const Vec3<T> v = -dir;
-    const Vec3<T> ap = glm::abs(p);
-    const T point_scale = std::max({ap.x, ap.y, ap.z});
+    const T point_scale = largest_coordinate(p);
     if (blockers_.size() != s_.lights.size()) blockers_.assign(s_.lights.size(), -1);
     const bool remember = !s_.bvh.empty() || !s_.shape_bvh.empty();  // small scenes: just loop
     for (std::size_t i = 0; i < s_.lights.size(); ++i) {
