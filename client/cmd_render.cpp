@@ -151,12 +151,17 @@ Runner add_render(CLI::App& app) {
         std::cerr << format_diagnostic(d, display_name(args->scene), *text);
     }
 
+    // Neither the text nor the scene's objects are read past this point: freed (the text
+    // here, the objects once prepared), their memory goes to the acceleration structures
+    // instead of fresh pages, which cost a large scene more than parsing it
+    // (docs/performance.md).
+    std::string().swap(*text);
     ProgressBar bar(isatty(STDERR_FILENO) && !args->quiet);
     RenderStats stats;
     std::string error;
-    Image image = render_image(*loaded->scene, *options, args->threads, &stats,
-                               [&bar](const RenderStats& s) { bar.update(s.progress(), s); },
-                               nullptr, &error);
+    Image image = render_image(
+        std::move(*loaded->scene), *options, args->threads, &stats,
+        [&bar](const RenderStats& s) { bar.update(s.progress(), s); }, nullptr, &error);
     bar.finish();
     if (!error.empty()) {
       std::cerr << "rayfarm: error: " << error << "\n";

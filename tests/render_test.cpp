@@ -33,6 +33,42 @@ TEST(Render, OutputIsByteIdenticalForAnyThreadCount) {
   }
 }
 
+TEST(Render, AConsumedSceneRendersTheSameImageAndLosesOnlyItsObjects) {
+  // Enough spheres for the hierarchy and the culling structures, which are built after the
+  // objects are freed.
+  std::string text = kScene;
+  for (int i = 0; i < 60; ++i)
+    text += "sphere { material red center " + std::to_string(i % 10 - 1) + " " +
+            std::to_string(i / 10 * 0.6) + " -" + std::to_string(6 + i % 7) + " radius .25 }\n";
+  const Scene original = scene_from(text);
+  const std::pair<Profile, Precision> variants[] = {{Profile::lecture, Precision::f64},
+                                                    {Profile::lecture, Precision::f32},
+                                                    {Profile::cpsc102, Precision::f64}};
+  for (const auto& [profile, precision] : variants) {
+    SCOPED_TRACE(std::string(to_string(profile)) + (precision == Precision::f32 ? " float" : ""));
+    RenderOptions o;
+    o.profile = profile;
+    o.precision = precision;
+    Scene consumed = original;
+    RenderStats kept_stats, consumed_stats;
+    const Image kept = render_image(original, o, 2, &kept_stats);
+    ASSERT_GT(kept.width, 0);
+    EXPECT_EQ(render_image(std::move(consumed), o, 2, &consumed_stats), kept);
+    EXPECT_EQ(consumed_stats.parts, kept_stats.parts);
+    EXPECT_TRUE(consumed.objects.empty());
+    EXPECT_EQ(consumed.cameras, original.cameras);
+    EXPECT_EQ(consumed.materials, original.materials);
+    EXPECT_EQ(consumed.lights, original.lights);
+  }
+  Scene bad = original;
+  RenderOptions o;
+  o.camera = "none";
+  std::string error;
+  EXPECT_EQ(render_image(std::move(bad), o, 1, nullptr, {}, nullptr, &error).width, 0);
+  EXPECT_FALSE(error.empty());
+  EXPECT_EQ(bad.objects, original.objects) << "a refused render frees nothing";
+}
+
 TEST(Render, RepeatedRendersAreIdenticalAndSeedsChangeOnlyJitteredImages) {
   Scene s = scene_from(kScene);
   RenderOptions o;

@@ -103,6 +103,10 @@ class PreparedRender {
   static std::shared_ptr<const PreparedRender> create(const Scene& scene,
                                                       const RenderOptions& options,
                                                       std::string* error);
+  // The same, but scene.objects is freed once read (before the acceleration structures are
+  // built, which then reuse its memory); the rest of the scene must outlive the result.
+  static std::shared_ptr<const PreparedRender> create(Scene&& scene, const RenderOptions& options,
+                                                      std::string* error);
   virtual ~PreparedRender() = default;
   // A job for `range` (see RenderJob::create), or nullptr with `error` set.
   virtual std::unique_ptr<RenderJob> job(TileRange range, std::string* error) const = 0;
@@ -114,6 +118,12 @@ class PreparedRender {
 // worker after each tile; `cancel` is polled. Returns an empty image with `error` set when
 // the job cannot start.
 Image render_image(const Scene& scene, const RenderOptions& options, int threads,
+                   RenderStats* stats = nullptr,
+                   const std::function<void(const RenderStats&)>& on_progress = {},
+                   const std::atomic<bool>* cancel = nullptr, std::string* error = nullptr);
+// The same for a scene that is not needed afterwards: its objects are freed once read (see
+// PreparedRender::create), which spares a large scene fresh memory.
+Image render_image(Scene&& scene, const RenderOptions& options, int threads,
                    RenderStats* stats = nullptr,
                    const std::function<void(const RenderStats&)>& on_progress = {},
                    const std::atomic<bool>* cancel = nullptr, std::string* error = nullptr);

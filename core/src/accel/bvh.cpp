@@ -362,15 +362,21 @@ class Collapser {
 }  // namespace
 
 Bvh build_bvh(std::span<const BvhBox> boxes, const BvhBuildOptions& options) {
+  return build_bvh(
+      boxes.size(), [&](std::size_t i) { return boxes[i]; }, options);
+}
+
+Bvh build_bvh(std::size_t count, const std::function<BvhBox(std::size_t)>& box_of,
+              const BvhBuildOptions& options) {
   Bvh bvh;
-  if (boxes.empty() ||
-      boxes.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 4))
+  if (count == 0 || count > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 4))
     return bvh;
   double scale = 0;
-  std::vector<Ref> refs(boxes.size());
-  for (std::size_t i = 0; i < boxes.size(); ++i) {
+  std::vector<Ref> refs(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const BvhBox box = box_of(i);
     for (int a = 0; a < 3; ++a) {
-      const double lo = boxes[i].lo[a], hi = boxes[i].hi[a];
+      const double lo = box.lo[a], hi = box.hi[a];
       if (!(lo <= hi)) return bvh;  // NaN or inverted: not for us
       scale = std::max({scale, std::abs(lo), std::abs(hi)});
       refs[i].box.lo[a] = round_down(lo);
@@ -383,7 +389,7 @@ Bvh build_bvh(std::span<const BvhBox> boxes, const BvhBuildOptions& options) {
   bvh.scale = scale;
 
   std::vector<BuildNode> tree(1);
-  tree.reserve(2 * boxes.size());
+  tree.reserve(2 * count);
   Bounds all;
   for (const Ref& r : refs) {
     all.box.grow(r.box);

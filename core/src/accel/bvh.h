@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <glm/vec3.hpp>
 #include <initializer_list>
 #include <limits>
@@ -72,6 +73,10 @@ inline BvhBox box_around(std::initializer_list<glm::dvec3> points) {
 // Builds the hierarchy; empty when there are no boxes or their coordinates do not fit the
 // float nodes comfortably (the caller then keeps its plain loop).
 Bvh build_bvh(std::span<const BvhBox> boxes, const BvhBuildOptions& options = {});
+// The same over `count` boxes given one by one (no array of them: for 100,000 spheres, 4.8 MB
+// less fresh memory).
+Bvh build_bvh(std::size_t count, const std::function<BvhBox(std::size_t)>& box_of,
+              const BvhBuildOptions& options = {});
 
 // The binary tree is at most this deep (the builder turns to median splits well before), so
 // the traversal stacks below cannot overflow: at most 3 entries are pushed per level.

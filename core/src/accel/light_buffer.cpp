@@ -141,6 +141,7 @@ LightBuffer build_light_buffer(const glm::dvec3& light, std::span<const WidenedS
   // Rectangles sphere by sphere, nearest first, so that every cell is filled nearest first.
   const std::vector<std::int32_t> order = order_by_near(near);
   std::vector<Rect> rects;
+  rects.reserve(order.size() + order.size() / 2);  // most spheres show on one or two faces
   for (;;) {
     rects.clear();
     double total = 0;
@@ -171,18 +172,23 @@ LightBuffer build_light_buffer(const glm::dvec3& light, std::span<const WidenedS
     lb.face_base[f] = used[f] ? static_cast<std::int32_t>(cells) : -1;
     if (used[f]) cells += face_cells;
   }
-  lb.start.assign(cells + 1, 0);
   auto for_cells = [&](const Rect& r, auto&& fn) {
     const std::size_t base = static_cast<std::size_t>(lb.face_base[r.face]);
     for (int a = r.a0; a <= r.a1; ++a)
       for (int b = r.b0; b <= r.b1; ++b) fn(base + static_cast<std::size_t>(a) * n + b);
   };
-  for (const Rect& r : rects) for_cells(r, [&](std::size_t c) { ++lb.start[c + 1]; });
-  for (std::size_t c = 0; c < cells; ++c) lb.start[c + 1] += lb.start[c];
-  lb.entries.resize(lb.start[cells]);
-  std::vector<std::uint32_t> fill(lb.start.begin(), lb.start.end() - 1);
+  // Counts two places on, so that the sums leave start[c + 1] where cell c begins; filling
+  // moves it to where c ends, which is where c + 1 begins. No second array as large as
+  // `start` (6 MB at 512 cells a side) to fill from.
+  lb.start.assign(cells + 2, 0);
+  for (const Rect& r : rects) for_cells(r, [&](std::size_t c) { ++lb.start[c + 2]; });
+  for (std::size_t c = 2; c <= cells + 1; ++c) lb.start[c] += lb.start[c - 1];
+  lb.entries.resize(lb.start[cells + 1]);
   for (const Rect& r : rects)
-    for_cells(r, [&](std::size_t c) { lb.entries[fill[c]++] = {r.sphere, near[r.sphere]}; });
+    for_cells(r, [&](std::size_t c) {
+      lb.entries[lb.start[c + 1]++] = {r.sphere, near[r.sphere]};
+    });
+  lb.start.pop_back();
   return lb;
 }
 

@@ -158,17 +158,17 @@ std::vector<std::string> Features::parts() const {
 
 template <class T>
 void build_sphere_bvh(PreparedScene<T>& p, int threads) {
-  std::vector<BvhBox> boxes;
-  boxes.reserve(p.spheres.size());
-  for (const PreparedSphere<T>& s : p.spheres) {
-    const glm::dvec3 c(s.centre);
-    const double r = static_cast<double>(s.radius);
-    boxes.push_back({c - r, c + r});
-  }
   BvhBuildOptions build;
   build.threads =
       threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  p.bvh = build_bvh(boxes, build);
+  p.bvh = build_bvh(
+      p.spheres.size(),
+      [&](std::size_t i) {
+        const glm::dvec3 c(p.spheres[i].centre);
+        const double r = static_cast<double>(p.spheres[i].radius);
+        return BvhBox{c - r, c + r};
+      },
+      build);
   p.bvh_spheres.clear();
   if (p.bvh.empty()) return;  // coordinates out of the nodes' range: keep the loop
   p.bvh_spheres.reserve(p.spheres.size());
@@ -305,7 +305,7 @@ void build_ray_culling(PreparedScene<T>& p) {
 
 template <class T>
 PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera,
-                               int build_threads) {
+                               int build_threads, std::vector<Object>* spent) {
   const Camera& cam = scene.cameras.at(camera);
   PreparedScene<T> p;
   p.width = options.width > 0 ? options.width : cam.width;
@@ -386,6 +386,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     reflective |= nonzero(scene.materials[o.material].specular);
     translucent |= scene.materials[o.material].transparency > 0;
   }
+  if (spent) std::vector<Object>().swap(*spent);  // nothing below reads the objects
 
   Features& f = p.features;
   f.transparency = translucent;  // before build_ray_culling, which leaves the light buffers out
@@ -456,8 +457,10 @@ std::vector<int> object_sources(const Scene& scene) {
   return out;
 }
 
-template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOptions&, int, int);
-template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int, int);
+template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOptions&, int, int,
+                                                   std::vector<Object>*);
+template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int, int,
+                                                     std::vector<Object>*);
 template void build_sphere_bvh<float>(PreparedScene<float>&, int);
 template void build_sphere_bvh<double>(PreparedScene<double>&, int);
 

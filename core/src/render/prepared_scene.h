@@ -133,9 +133,12 @@ inline constexpr std::size_t kBvhMinShapes = 4;
 
 // Converts a checked scene for rendering. `camera` is an index into scene.cameras.
 // `build_threads` (0: all cores) only changes how fast the hierarchy is built, never it.
+// `spent` (optional): scene.objects itself, freed once read, before the acceleration
+// structures are built, so that they reuse its memory (fresh memory is what a large scene's
+// preparation costs most on the machines measured; docs/performance.md).
 template <class T>
 PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options, int camera,
-                               int build_threads = 0);
+                               int build_threads = 0, std::vector<Object>* spent = nullptr);
 
 // Each object number of a prepared scene (spheres, then planes, then the other shapes, each
 // in file order): its index in scene.objects.

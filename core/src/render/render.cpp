@@ -348,22 +348,40 @@ std::shared_ptr<const PreparedRender> prepared(Pipeline pipeline, const RenderOp
                                                       ms_between(t0, Clock::now()));
 }
 
+// PreparedRender::create; `spent` (optional) is scene.objects, freed once read.
+std::shared_ptr<const PreparedRender> create_prepared(const Scene& scene,
+                                                      const RenderOptions& options,
+                                                      std::string* error,
+                                                      std::vector<Object>* spent) {
+  const std::optional<int> camera = check_render(scene, options, error);
+  if (!camera) return nullptr;
+  const Clock::time_point t0 = Clock::now();
+  if (options.profile == Profile::cpsc102) {
+    auto p =
+        prepared(cpsc102::ReferencePipeline(cpsc102::prepare_reference(scene, options, *camera)),
+                 options, t0);
+    if (spent) std::vector<Object>().swap(*spent);
+    return p;
+  }
+  if (options.precision == Precision::f32)
+    return prepared(LecturePipeline<float>(prepare_scene<float>(scene, options, *camera, 0, spent)),
+                    options, t0);
+  return prepared(LecturePipeline<double>(prepare_scene<double>(scene, options, *camera, 0, spent)),
+                  options, t0);
+}
+
 }  // namespace
 
 std::shared_ptr<const PreparedRender> PreparedRender::create(const Scene& scene,
                                                              const RenderOptions& options,
                                                              std::string* error) {
-  const std::optional<int> camera = check_render(scene, options, error);
-  if (!camera) return nullptr;
-  const Clock::time_point t0 = Clock::now();
-  if (options.profile == Profile::cpsc102)
-    return prepared(cpsc102::ReferencePipeline(cpsc102::prepare_reference(scene, options, *camera)),
-                    options, t0);
-  if (options.precision == Precision::f32)
-    return prepared(LecturePipeline<float>(prepare_scene<float>(scene, options, *camera)),
-                    options, t0);
-  return prepared(LecturePipeline<double>(prepare_scene<double>(scene, options, *camera)),
-                  options, t0);
+  return create_prepared(scene, options, error, nullptr);
+}
+
+std::shared_ptr<const PreparedRender> PreparedRender::create(Scene&& scene,
+                                                             const RenderOptions& options,
+                                                             std::string* error) {
+  return create_prepared(scene, options, error, &scene.objects);
 }
 
 std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOptions& options,
@@ -374,10 +392,12 @@ std::unique_ptr<RenderJob> RenderJob::create(const Scene& scene, const RenderOpt
   return prepared->job(range, error);
 }
 
-Image render_image(const Scene& scene, const RenderOptions& options, int threads,
-                   RenderStats* stats, const std::function<void(const RenderStats&)>& on_progress,
-                   const std::atomic<bool>* cancel, std::string* error) {
-  auto job = RenderJob::create(scene, options, error);
+namespace {
+
+// Runs a job on `threads` threads of its own (render_image).
+Image run_job(std::unique_ptr<RenderJob> job, int threads, RenderStats* stats,
+              const std::function<void(const RenderStats&)>& on_progress,
+              const std::atomic<bool>* cancel) {
   if (!job) return {};
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   auto work = [&] {
@@ -395,6 +415,22 @@ Image render_image(const Scene& scene, const RenderOptions& options, int threads
   for (auto& t : pool) t.join();
   if (stats) *stats = job->stats();
   return job->take_image();
+}
+
+}  // namespace
+
+Image render_image(const Scene& scene, const RenderOptions& options, int threads,
+                   RenderStats* stats, const std::function<void(const RenderStats&)>& on_progress,
+                   const std::atomic<bool>* cancel, std::string* error) {
+  return run_job(RenderJob::create(scene, options, error), threads, stats, on_progress, cancel);
+}
+
+Image render_image(Scene&& scene, const RenderOptions& options, int threads, RenderStats* stats,
+                   const std::function<void(const RenderStats&)>& on_progress,
+                   const std::atomic<bool>* cancel, std::string* error) {
+  auto prepared = PreparedRender::create(std::move(scene), options, error);
+  return run_job(prepared ? prepared->job({0, prepared->tiles()}, error) : nullptr, threads, stats,
+                 on_progress, cancel);
 }
 
 }  // namespace rayfarm
