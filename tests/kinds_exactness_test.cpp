@@ -325,8 +325,11 @@ TEST(KindsExactness, ClosestOccludedAndTransmittanceEqualTheLoopsOnRandomScenes)
 
 // Every pixel whose primary ray a shape's own test hits lies in that shape's rectangle, in
 // the shape bin of its tile (the bins list shapes by the spheres around their boxes).
+// `min_hits` (-1: a twentieth of the pixels) keeps the check from passing on a scene whose
+// shapes are out of sight; `hits_out` (optional) adds how many pixel and shape pairs hit.
 template <class T>
-void expect_shape_bins_hold_every_hit(const Scene& scene, int width, int height, int spp) {
+void expect_shape_bins_hold_every_hit(const Scene& scene, int width, int height, int spp,
+                                      int min_hits = -1, int* hits_out = nullptr) {
   RenderOptions o;
   o.width = width;
   o.height = height;
@@ -356,7 +359,8 @@ void expect_shape_bins_hold_every_hit(const Scene& scene, int width, int height,
               << "shape " << k << " pixel " << x << "," << r;
         }
       }
-  EXPECT_GT(hits, width * height / 20);
+  EXPECT_GE(hits, min_hits < 0 ? width * height / 20 : min_hits);
+  if (hits_out) *hits_out += hits;
 }
 
 TEST(KindsExactness, ShapeBinsHoldEveryPixelAShapeTestHits) {
@@ -372,6 +376,54 @@ TEST(KindsExactness, ShapeBinsHoldEveryPixelAShapeTestHits) {
       expect_shape_bins_hold_every_hit<double>(scene, 40, 30, 3);
     }
   }
+}
+
+// A few shapes and fewer spheres than pay for a hierarchy: the screen bins alone (every
+// primary ray tests a shape only where it covers the screen), and the same bytes.
+TEST(KindsExactness, AFewShapesWithoutTheHierarchyHaveScreenBinsAndRenderTheSame) {
+  int hits = 0;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    Rng rng(40 + seed);
+    const Scene full = kinds_scene(rng, seed % 2 == 1);
+    for (const auto& [spheres, shapes] : {std::pair{0, 1}, std::pair{3, 2}, std::pair{7, 3}}) {
+      Scene scene = full;
+      scene.objects.clear();
+      int kept_spheres = 0, kept_shapes = 0;
+      for (const Object& o : full.objects) {
+        const bool sphere = o.kind == EntityKind::sphere;
+        const bool plane = o.kind == EntityKind::plane || o.kind == EntityKind::tiled_plane;
+        if (sphere ? kept_spheres++ < spheres : plane || kept_shapes++ < shapes)
+          scene.objects.push_back(o);
+      }
+      for (const glm::dvec3& eye : {kEyes[0], kEyes[1], kEyes[3]}) {
+        SCOPED_TRACE("seed " + std::to_string(seed) + ", " + std::to_string(spheres) +
+                     " spheres, " + std::to_string(shapes) + " shapes, eye " +
+                     std::to_string(eye.x) + "," + std::to_string(eye.y) + "," +
+                     std::to_string(eye.z));
+        scene.cameras[0].viewpoint = eye;
+        for (int spp : {1, 3}) {
+          RenderOptions o;
+          o.spp = spp;
+          o.width = 48;
+          o.height = 36;
+          RenderStats stats;
+          const Image fast = render_image(scene, o, 2, &stats);
+          ASSERT_EQ(fast.width, o.width);
+          auto has = [&](const char* part) {
+            return std::find(stats.parts.begin(), stats.parts.end(), part) != stats.parts.end();
+          };
+          EXPECT_TRUE(has("screen-bins"));
+          for (const char* part : {"bvh", "mirror-bins", "light-buffers"})
+            EXPECT_FALSE(has(part)) << part;
+          o.specialize = false;
+          EXPECT_EQ(render_image(scene, o, 2), fast);
+        }
+        expect_shape_bins_hold_every_hit<double>(scene, 48, 36, 1, 0, &hits);
+        expect_shape_bins_hold_every_hit<float>(scene, 48, 36, 1, 0, &hits);
+      }
+    }
+  }
+  EXPECT_GT(hits, 1000) << "the shapes are in sight";
 }
 
 // revsurf_t's first test, a sphere around the surface's cylinder, never drops a crossing:

@@ -234,7 +234,10 @@ void add_mirror_bins(PreparedScene<T>& p, double view, double scale, double pad_
   p.mirror_slack = 16 * std::sqrt(eps);
 }
 
-// Builds the screen bins and (with shadows on) the light buffers, where they pay.
+// Builds the screen bins, the mirror bins and (with shadows on) the light buffers, where they
+// pay: the screen bins from a single shape on (primary rays then test a shape only on the
+// pixels it covers: a flat shape's test divides, a surface of revolution's searches; lab
+// 1.55 -> 1.36 G instructions), the rest only with the sphere hierarchy.
 template <class T>
 void build_ray_culling(PreparedScene<T>& p) {
   // Scales: no sphere or light has a coordinate beyond `scale`, nor the eye beyond `view`.
@@ -274,10 +277,12 @@ void build_ray_culling(PreparedScene<T>& p) {
     const ScreenCamera camera{glm::dvec3(p.eye), ww, wh, p.width, p.height, pad_x, pad_y};
     p.screen_bins =
         build_screen_bins(camera, widened(256 * eps * 2 * view), kTileSize, kMaxCoverage);
-    if (!p.screen_bins.empty() && p.shapes.size() >= kBvhMinShapes)
+    if (!p.screen_bins.empty() && !p.shapes.empty())
       p.shape_bins = build_screen_bins(camera, shape_spheres(p, eps, view), kTileSize, kMaxCoverage);
   }
   p.features.screen_bins = !p.screen_bins.empty();
+  // The rest stands in for the sphere hierarchy: where there is none, the loop is cheaper.
+  if (p.spheres.size() < kBvhMinSpheres) return;
   if (pad_x <= kMaxPad && pad_y <= kMaxPad) add_mirror_bins(p, view, scale, pad_x, pad_y);
 
   // Light buffers answer "is anything in the way"; through translucent objects the shadow
@@ -406,8 +411,10 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
         p.materials[pl.material].lit = true;
     // The reference (unspecialized) path always loops, so tests compare the two. The
     // hierarchy and the culling structures are independent: with two threads or more they
-    // are built side by side.
-    if (p.spheres.size() >= kBvhMinSpheres) {
+    // are built side by side. Shapes alone ask for the screen bins (build_ray_culling).
+    if (p.spheres.size() < kBvhMinSpheres) {
+      if (!p.shapes.empty()) build_ray_culling(p);
+    } else {
       const int threads =
           build_threads > 0 ? build_threads
                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
