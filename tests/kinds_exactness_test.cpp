@@ -323,6 +323,81 @@ TEST(KindsExactness, ClosestOccludedAndTransmittanceEqualTheLoopsOnRandomScenes)
   }
 }
 
+// Shadow rays that the light buffers answer (they list the other shapes, by the spheres about
+// their boxes, after the spheres) are answered as by the loop: from points on every kind,
+// from either side, to a point light, a spotlight, a projector and a light inside a surface
+// of revolution (whose sphere is then "around" the light), among many small triangles.
+template <class T>
+void expect_same_buffered_shadows(const Scene& scene, Rng& rng, int rays, int& answered,
+                                  int& by_shapes, int& blocked, int& total) {
+  RenderOptions off;
+  off.specialize = false;
+  const PreparedScene<T> loop = prepare_scene<T>(scene, off, 0);
+  const PreparedScene<T> fast = prepare_scene<T>(scene, RenderOptions{}, 0, 2);
+  ASSERT_TRUE(fast.features.light_buffers);
+  ASSERT_EQ(fast.light_buffers.size(), fast.lights.size());
+  const Tracer<T> a(loop), b(fast);
+  const glm::dvec3 mid = (kLo + kHi) / 2.0;
+  const T inf = std::numeric_limits<T>::infinity();
+  for (int i = 0; i < rays; ++i) {
+    const Vec3<T> o(mid + rng.point(rng.chance(0.3) ? 20 : 7));
+    const Vec3<T> d(rng.direction());
+    const Hit<T> h = a.closest(o, d, {}, inf);
+    if (h.object < 0) continue;
+    const Vec3<T> p = o + h.t * d;
+    const Origin from{h.object, rng.chance(0.5)};
+    for (std::size_t l = 0; l < fast.lights.size(); ++l) {
+      Vec3<T> to = fast.lights[l].location - p;
+      const T r = glm::length(to);
+      if (!(r > 0)) continue;
+      to /= r;
+      const T dist = r * (1 - 64 * std::numeric_limits<T>::epsilon());
+      const LightBuffer& buffer = fast.light_buffers[l];
+      int blocker = -1;
+      const bool expected = a.occluded(p, to, from, dist);
+      ASSERT_EQ(b.occluded(p, to, from, dist, &blocker, buffer.empty() ? nullptr : &buffer),
+                expected)
+          << "ray " << i << " light " << l << " from object " << h.object;
+      LightBuffer::Cell cell;
+      answered += !buffer.empty() && buffer.lookup(glm::dvec3(p), cell);
+      by_shapes += expected && blocker >= fast.shape_base();
+      blocked += expected;
+      ++total;
+    }
+  }
+}
+
+TEST(KindsExactness, LightBuffersListingShapesCastTheLoopsShadows) {
+  int answered = 0, by_shapes = 0, blocked = 0, total = 0;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    Rng rng(500 + seed);
+    Scene scene = kinds_scene(rng, false);
+    for (int i = 0; i < 150; ++i) {
+      Triangle t;
+      const glm::dvec3 at = point_in_box(rng);
+      for (glm::dvec3& v : t.vertex) v = at + rng.point(0.4);
+      add(scene, rng.chance(0.5) ? EntityKind::tri : EntityKind::triangle, 0, t);
+    }
+    for (const Object& o : scene.objects)
+      if (const auto* boxed = std::get_if<Boxed<Revsurf>>(&o.shape)) {
+        const Revsurf* r = boxed->get();
+        Light& inside = scene.lights.emplace_back();
+        inside.name = "inside";
+        inside.location = r->base + 0.4 * r->height * glm::normalize(r->direction);
+        inside.emissivity = glm::dvec3(3);
+        break;
+      }
+    expect_same_buffered_shadows<double>(scene, rng, 1500, answered, by_shapes, blocked, total);
+    expect_same_buffered_shadows<float>(scene, rng, 1500, answered, by_shapes, blocked, total);
+  }
+  // Both answers, shapes among the blockers, and the buffers (not the fallback) answering.
+  EXPECT_GT(blocked, total / 10);
+  EXPECT_LT(blocked, total - total / 10);
+  EXPECT_GT(by_shapes, blocked / 5);
+  EXPECT_GT(answered, total * 3 / 4);
+}
+
 // Every pixel whose primary ray a shape's own test hits lies in that shape's rectangle, in
 // the shape bin of its tile (the bins list shapes by the spheres around their boxes).
 // `min_hits` (-1: a twentieth of the pixels) keeps the check from passing on a scene whose
@@ -376,6 +451,63 @@ TEST(KindsExactness, ShapeBinsHoldEveryPixelAShapeTestHits) {
       expect_shape_bins_hold_every_hit<double>(scene, 40, 30, 3);
     }
   }
+}
+
+// Every pixel whose reflection ray off a plane with mirror bins meets a shape (by the shape's
+// own test, on the ray the tracer sends) lies in that shape's rectangle in the plane's
+// mirror bins over shapes.
+template <class T>
+int expect_mirror_shape_bins_hold_every_hit(const Scene& scene, int width, int height) {
+  RenderOptions o;
+  o.width = width;
+  o.height = height;
+  const LecturePipeline<T> pipeline(prepare_scene<T>(scene, o, 0));
+  const PreparedScene<T>& p = pipeline.scene();
+  const Tracer<T> tracer(p);
+  int hits = 0;
+  for (int r = 0; r < height; ++r)
+    for (int x = 0; x < width; ++x) {
+      const auto d = tracer.primary_direction(pipeline.screen_point_of(x, r, 0));
+      if (!d) continue;
+      const Hit<T> first = tracer.closest(p.eye, *d, Origin{}, p.max_dist);
+      const int j = first.object - p.plane_base();
+      if (first.object < 0 || j < 0 || j >= static_cast<int>(p.mirror_shape_bins.size()) ||
+          p.mirror_shape_bins[j].empty())
+        continue;
+      const auto bounce = tracer.primary_bounce(*d, first);
+      if (!bounce) continue;
+      const glm::dvec3 at = glm::abs(glm::dvec3(bounce->origin));
+      if (!(std::max({at.x, at.y, at.z}) <= p.mirror_reach)) continue;
+      const ScreenBins& bins = p.mirror_shape_bins[j];
+      const int tile = (r / kTileSize) * bins.tiles_x + x / kTileSize;
+      for (int k = 0; k < static_cast<int>(p.shapes.size()); ++k) {
+        const int index = p.shape_base() + k;
+        if (!(shape_t(p.shapes[k], bounce->origin, bounce->dir, index, bounce->from) > 0)) continue;
+        ++hits;
+        bool listed = false;
+        for (const ScreenBinEntry& e : bins.of_tile(tile))
+          listed = listed || (e.sphere == k && x >= e.x0 && x <= e.x1 && r >= e.r0 && r <= e.r1);
+        EXPECT_TRUE(listed) << "shape " << k << " pixel " << x << "," << r << " plane " << j;
+      }
+    }
+  return hits;
+}
+
+TEST(KindsExactness, MirrorBinsOverShapesHoldEveryReflectionAShapeTestHits) {
+  int hits = 0;
+  for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+    Rng rng(700 + seed);
+    Scene scene = kinds_scene(rng, false);
+    for (const glm::dvec3& eye : {kEyes[0], kEyes[1], kEyes[3]}) {
+      SCOPED_TRACE("seed " + std::to_string(seed) + " eye " + std::to_string(eye.x) + "," +
+                   std::to_string(eye.y) + "," + std::to_string(eye.z));
+      scene.cameras[0].viewpoint = eye;
+      ASSERT_FALSE(prepare_scene<double>(scene, RenderOptions{}, 0).mirror_shape_bins.empty());
+      hits += expect_mirror_shape_bins_hold_every_hit<double>(scene, 80, 60);
+      hits += expect_mirror_shape_bins_hold_every_hit<float>(scene, 80, 60);
+    }
+  }
+  EXPECT_GT(hits, 1000) << "reflections meet the shapes";
 }
 
 // A few shapes and fewer spheres than pay for a hierarchy: the screen bins alone (every

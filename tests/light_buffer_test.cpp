@@ -194,11 +194,11 @@ TEST(LightBuffer, ListsSpheresAboutTheLightForEveryRayAndDeclinesWhatItCannotAns
   // Towards +x the cell holds sphere 1 (and only it: sphere 2 lies towards -z).
   ASSERT_TRUE(lb.lookup({10, 0, 0}, cell));
   ASSERT_EQ(cell.end - cell.begin, 1);
-  EXPECT_EQ(cell.begin->sphere, 1);
+  EXPECT_EQ(cell.begin->blocker, 1);
   EXPECT_FLOAT_EQ(cell.begin->near, 3.5f);
   ASSERT_TRUE(lb.lookup({0.5, 0, -20}, cell));
   ASSERT_EQ(cell.end - cell.begin, 1);
-  EXPECT_EQ(cell.begin->sphere, 2);
+  EXPECT_EQ(cell.begin->blocker, 2);
   EXPECT_FALSE(lb.lookup({0.5, 0, 0}, cell));   // the light itself: no direction
   EXPECT_FALSE(lb.lookup({101, 0, 0}, cell));   // beyond reach
   EXPECT_FALSE(lb.lookup({NAN, 0, 0}, cell));

@@ -3,12 +3,13 @@
 // that a line from the light through the cell can meet, nearest the light first. A shadow
 // ray from p is a segment from p to the light, so it can only be blocked by spheres of the
 // cell that (p - light) points into, and of those only by the ones that begin nearer the
-// light than p.
+// light than p. The spheres are the blockers' bounds: the scene's spheres, and the spheres
+// about other shapes (the caller numbers them).
 //
-// It must never leave out a sphere the tracer's own sphere test would report, or a shadow
-// would change. The caller widens each sphere by a margin covering the rounding of that test
-// and of the shadow ray's direction for points within `reach`; cells are found from the
-// widened sphere's box, and the lookup declines (returns false) for points farther out.
+// It must never leave out a blocker the tracer's own test would report, or a shadow would
+// change. The caller widens each sphere by a margin covering the rounding of that test and
+// of the shadow ray's direction for points within `reach`; cells are found from the widened
+// sphere's box, and the lookup declines (returns false) for points farther out.
 #pragma once
 
 #include <array>
@@ -22,7 +23,7 @@
 namespace rayfarm {
 
 struct LightBufferEntry {
-  std::int32_t sphere;  // index into the scene's spheres
+  std::int32_t blocker;  // index into the spheres the buffer was built from
   float near;           // no point of the widened sphere is nearer the light than this
 };
 
@@ -33,7 +34,7 @@ struct LightBuffer {
   std::array<std::int32_t, 6> face_base{};  // first cell of each face in `start`; -1: empty face
   std::vector<std::uint32_t> start;         // a cell's entries: [start[c], start[c + 1])
   std::vector<LightBufferEntry> entries;    // per cell, nearest first
-  std::vector<std::int32_t> around;         // spheres that contain (or touch) the light
+  std::vector<std::int32_t> around;         // blockers whose spheres contain (or touch) the light
 
   bool empty() const { return n == 0; }
 

@@ -168,7 +168,8 @@ class LecturePipeline {
       ray.bounce = static_cast<int>(bounces.size());
       bounces.push_back({*bounce, j, ray.hit.t, Hit<T>{}});
       BounceRay& br = bounces.back();
-      tracer.closest_plane(br.ray.origin, br.ray.dir, br.ray.from, br.ray.t_max, br.hit);
+      tracer.closest_plane(br.ray.origin, br.ray.dir, br.ray.from, br.ray.t_max, br.hit,
+                           shape_bins(j) == nullptr);
       used |= 1u << std::min(j, 31);
     }
     if (bounces.empty()) return;
@@ -177,6 +178,26 @@ class LecturePipeline {
     const int w = b.width();
     for (int j = 0; j < planes; ++j) {
       if (!(used & (1u << std::min(j, 31))) || s_.mirror_bins[j].empty()) continue;
+      // Shapes first, on every pixel of their rectangles (as in first_hits, not skipped by
+      // their near bound), then the spheres.
+      if (const ScreenBins* shapes = shape_bins(j)) {
+        for (const ScreenBinEntry& e : shapes->of_tile(tile)) {
+          const PreparedShape<T>& shape = s_.shapes[e.sphere];
+          const int index = s_.shape_base() + e.sphere;
+          const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
+          const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
+          for (int r = er0; r <= er1; ++r) {
+            const PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
+            for (int x = ex0; x <= ex1; ++x, ++ray) {
+              if (ray->bounce < 0) continue;
+              BounceRay& br = bounces[ray->bounce];
+              if (br.plane != j) continue;
+              const T t = shape_t(shape, br.ray.origin, br.ray.dir, index, br.ray.from);
+              if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, index)) br.hit = {t, index};
+            }
+          }
+        }
+      }
       for (const ScreenBinEntry& e : s_.mirror_bins[j].of_tile(tile)) {
         const PreparedSphere<T>& sp = s_.spheres[e.sphere];
         const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
@@ -198,6 +219,13 @@ class LecturePipeline {
         }
       }
     }
+  }
+
+  // Plane j's mirror bins over the other shapes, if the scene has shapes and they were built.
+  const ScreenBins* shape_bins(int j) const {
+    return j < static_cast<int>(s_.mirror_shape_bins.size()) && !s_.mirror_shape_bins[j].empty()
+               ? &s_.mirror_shape_bins[j]
+               : nullptr;
   }
 
   // The world point of pixel (x, y) in pass `pass` (jittered when supersampling).

@@ -178,22 +178,24 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
 
 namespace {
 
-// The spheres around the other shapes' boxes, for their screen bins: widened like the
-// spheres' by 256 epsilons of the coordinates involved, which covers the rounding of the
+// The spheres around the other shapes' boxes, for the screen bins and the light buffers:
+// widened like the spheres by `margin(scale)`, 256 epsilons of the coordinates involved
+// (`scale`: the largest |coordinate| of any shape's box), which covers the rounding of the
 // point a shape test finds (it lies on the ray, and within that of the shape).
-template <class T>
-std::vector<WidenedSphere> shape_spheres(const PreparedScene<T>& p, double eps, double view) {
+template <class T, class Margin>
+std::vector<WidenedSphere> shape_spheres(const PreparedScene<T>& p, Margin margin) {
   std::vector<BvhBox> boxes;
-  double scale = view;
+  double scale = 0;
   for (const PreparedShape<T>& s : p.shapes) {
     boxes.push_back(shape_box(s));
     for (const glm::dvec3& c : {boxes.back().lo, boxes.back().hi})
       scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
   }
+  const double m = margin(scale);
   std::vector<WidenedSphere> out;
   out.reserve(boxes.size());
   for (const BvhBox& b : boxes)
-    out.push_back({(b.lo + b.hi) / 2.0, glm::length(b.hi - b.lo) / 2 + 256 * eps * 2 * scale});
+    out.push_back({(b.lo + b.hi) / 2.0, glm::length(b.hi - b.lo) / 2 + m});
   return out;
 }
 
@@ -201,7 +203,9 @@ std::vector<WidenedSphere> shape_spheres(const PreparedScene<T>& p, double eps, 
 // ray strays from the mirrored primary ray by tens of epsilons of |eye|, |p| and the plane's
 // point (origin) plus tens of epsilons per unit of length (direction), and the sphere test
 // errs by tens of epsilons of the coordinates: spheres are widened by 1024 epsilons of all
-// of them together, for origins p within `reach`.
+// of them together, for origins p within `reach`. The other shapes get bins of their own,
+// from the spheres about their boxes widened likewise (with their coordinates among the
+// scales: a shape's hit lies in its box, so the ray is at most |p| + those long there).
 template <class T>
 void add_mirror_bins(PreparedScene<T>& p, double view, double scale, double pad_x,
                        double pad_y) {
@@ -228,6 +232,13 @@ void add_mirror_bins(PreparedScene<T>& p, double view, double scale, double pad_
     p.mirror_bins.resize(p.planes.size());
     p.mirror_bins[j] = std::move(bins);
     p.features.mirror_bins = true;
+    if (p.shapes.empty()) continue;
+    const std::vector<WidenedSphere> shapes = shape_spheres(p, [&](double shape_scale) {
+      return 1024 * eps * (reach + view + std::max(scale, shape_scale) + plane_scale);
+    });
+    p.mirror_shape_bins.resize(p.planes.size());
+    p.mirror_shape_bins[j] =
+        build_mirror_bins(camera, shapes, glm::dvec3(pl.normal), q, kTileSize, kMaxCoverage);
   }
   p.mirror_reach = reach;
   // The sphere test's near root can fall short by about sqrt(epsilon) of the distance.
@@ -278,7 +289,10 @@ void build_ray_culling(PreparedScene<T>& p) {
     p.screen_bins =
         build_screen_bins(camera, widened(256 * eps * 2 * view), kTileSize, kMaxCoverage);
     if (!p.screen_bins.empty() && !p.shapes.empty())
-      p.shape_bins = build_screen_bins(camera, shape_spheres(p, eps, view), kTileSize, kMaxCoverage);
+      p.shape_bins = build_screen_bins(
+          camera,
+          shape_spheres(p, [&](double shapes) { return 256 * eps * 2 * std::max(view, shapes); }),
+          kTileSize, kMaxCoverage);
   }
   p.features.screen_bins = !p.screen_bins.empty();
   // The rest stands in for the sphere hierarchy: where there is none, the loop is cheaper.
@@ -288,18 +302,26 @@ void build_ray_culling(PreparedScene<T>& p) {
   // Light buffers answer "is anything in the way"; through translucent objects the shadow
   // ray must find every one on its way, so they step aside.
   if (!p.features.shadows || p.features.transparency) return;
-  // Each buffer costs about one pass over the spheres and a few entries per sphere: past
+  // The other shapes go in too, after the spheres (LightBuffer's blocker numbers), so that a
+  // shadow ray the buffer answers needs no walk of their hierarchy: a shape's hit on the
+  // segment lies in the sphere about its box, which is listed wherever that segment can go.
+  std::vector<WidenedSphere> blockers = widened(256 * eps * (reach + scale));
+  if (!p.shapes.empty()) {
+    const std::vector<WidenedSphere> more = shape_spheres(
+        p, [&](double shapes) { return 256 * eps * (reach + std::max(scale, shapes)); });
+    blockers.insert(blockers.end(), more.begin(), more.end());
+  }
+  // Each buffer costs about one pass over the blockers and a few entries per blocker: past
   // these budgets (time, and memory a small multiple of the scene's), the rest of the
-  // lights keep the hierarchy.
+  // lights keep the hierarchies.
   constexpr double kMaxWork = 8e6;
-  const double max_entries = 64.0 * static_cast<double>(p.spheres.size());
-  const std::size_t lights =
-      std::min(p.lights.size(), static_cast<std::size_t>(kMaxWork / static_cast<double>(p.spheres.size())));
-  const std::vector<WidenedSphere> spheres = widened(256 * eps * (reach + scale));
+  const double count = static_cast<double>(blockers.size());
+  const double max_entries = 64.0 * count;
+  const std::size_t lights = std::min(p.lights.size(), static_cast<std::size_t>(kMaxWork / count));
   p.light_buffers.resize(p.lights.size());
   double entries = 0;
   for (std::size_t i = 0; i < lights && entries <= max_entries; ++i) {
-    p.light_buffers[i] = build_light_buffer(glm::dvec3(p.lights[i].location), spheres, reach);
+    p.light_buffers[i] = build_light_buffer(glm::dvec3(p.lights[i].location), blockers, reach);
     entries += static_cast<double>(p.light_buffers[i].entries.size());
     p.features.light_buffers = p.features.light_buffers || !p.light_buffers[i].empty();
   }

@@ -118,6 +118,9 @@ struct PreparedScene {
   // the reflection rays primary rays send off it whose origin has no |coordinate| beyond
   // mirror_reach. Searched with the slack mirror_slack (mirror_near).
   std::vector<ScreenBins> mirror_bins;
+  // The same over the other shapes (entries name shapes), per plane with mirror_bins: where
+  // one is empty, those reflection rays test the shapes through shape_bvh.
+  std::vector<ScreenBins> mirror_shape_bins;
   double mirror_reach = 0;
   double mirror_slack = 0;
   Bvh shape_bvh;                          // empty: the other shapes are tested in a loop

@@ -198,18 +198,24 @@ class Tracer {
       if (last < base ? blocks(last) : shape_blocks_one(last - s_.shape_base(), o, d, from, dist))
         return true;
     }
-    // Every kind is asked before "nothing in the way": the light buffer knows spheres only.
-    if (!s_.shapes.empty() && shape_blocks(o, d, from, dist, last_blocker)) return true;
     if (buffered) {
+      // The buffer lists the spheres and, numbered after them, the other shapes.
+      const int ns = static_cast<int>(s_.spheres.size()), shape_base = s_.shape_base();
+      auto blocker_blocks = [&](std::int32_t i) {
+        return i < ns ? blocks(i) && remember(last_blocker, i)
+                      : shape_blocks_one(i - ns, o, d, from, dist) &&
+                            remember(last_blocker, shape_base + (i - ns));
+      };
       for (std::int32_t i : light->around)
-        if (blocks(i)) return remember(last_blocker, i);
+        if (blocker_blocks(i)) return true;
       for (const LightBufferEntry* e = cell.begin; e != cell.end; ++e) {
-        const double near = e->near;  // > 0: spheres about the light are not in cells
+        const double near = e->near;             // > 0: blockers about the light are not in cells
         if (near * near > cell.limit_sq) break;  // nearest first: none further can block
-        if (blocks(e->sphere)) return remember(last_blocker, e->sphere);
+        if (blocker_blocks(e->blocker)) return true;
       }
       return false;
     }
+    if (!s_.shapes.empty() && shape_blocks(o, d, from, dist, last_blocker)) return true;
     BvhRay ray;
     if (!s_.bvh.empty() && ray.init(o, d, s_.bvh.scale)) {
       const BvhSphere<T>* spheres = s_.bvh_spheres.data();
