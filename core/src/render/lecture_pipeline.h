@@ -119,31 +119,21 @@ class LecturePipeline {
     for (const ScreenBinEntry& e : shapes) {
       const PreparedShape<T>& shape = s_.shapes[e.sphere];
       const int index = shape_base + e.sphere;
-      const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
-      const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
-      for (int r = er0; r <= er1; ++r) {
-        PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
-        for (int x = ex0; x <= ex1; ++x, ++ray) {
-          if (!ray->dir) continue;
-          const T t = shape_t(shape, s_.eye, *ray->dir, index, Origin{});
-          if (t > 0 && t <= t_max && ray->hit.beaten_by(t, index)) ray->hit = {t, index};
-        }
-      }
+      for_rectangle(e, b, rays.data(), [&](PrimaryRay& ray) {
+        if (!ray.dir) return;
+        const T t = shape_t(shape, s_.eye, *ray.dir, index, Origin{});
+        if (t > 0 && t <= t_max && ray.hit.beaten_by(t, index)) ray.hit = {t, index};
+      });
     }
     for (const ScreenBinEntry& e : s_.screen_bins.of_tile(tile)) {
       const PreparedSphere<T>& sp = s_.spheres[e.sphere];
       const double near = e.near;
-      const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
-      const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
-      for (int r = er0; r <= er1; ++r) {
-        PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
-        for (int x = ex0; x <= ex1; ++x, ++ray) {
-          Hit<T>& best = ray->hit;
-          if (!ray->dir || near > static_cast<double>(best.t)) continue;
-          const T t = sphere_t(s_.eye, *ray->dir, sp.centre, sp.radius, e.sphere, Origin{});
-          if (t > 0 && t <= t_max && best.beaten_by(t, e.sphere)) best = {t, e.sphere};
-        }
-      }
+      for_rectangle(e, b, rays.data(), [&](PrimaryRay& ray) {
+        Hit<T>& best = ray.hit;
+        if (!ray.dir || near > static_cast<double>(best.t)) return;
+        const T t = sphere_t(s_.eye, *ray.dir, sp.centre, sp.radius, e.sphere, Origin{});
+        if (t > 0 && t <= t_max && best.beaten_by(t, e.sphere)) best = {t, e.sphere};
+      });
     }
   }
 
@@ -175,7 +165,6 @@ class LecturePipeline {
     if (bounces.empty()) return;
     const TileGrid grid(s_.width, s_.height);
     const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
-    const int w = b.width();
     for (int j = 0; j < planes; ++j) {
       if (!(used & (1u << std::min(j, 31))) || s_.mirror_bins[j].empty()) continue;
       // Shapes first, on every pixel of their rectangles (as in first_hits, not skipped by
@@ -184,40 +173,41 @@ class LecturePipeline {
         for (const ScreenBinEntry& e : shapes->of_tile(tile)) {
           const PreparedShape<T>& shape = s_.shapes[e.sphere];
           const int index = s_.shape_base() + e.sphere;
-          const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
-          const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
-          for (int r = er0; r <= er1; ++r) {
-            const PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
-            for (int x = ex0; x <= ex1; ++x, ++ray) {
-              if (ray->bounce < 0) continue;
-              BounceRay& br = bounces[ray->bounce];
-              if (br.plane != j) continue;
-              const T t = shape_t(shape, br.ray.origin, br.ray.dir, index, br.ray.from);
-              if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, index)) br.hit = {t, index};
-            }
-          }
+          for_rectangle(e, b, rays.data(), [&](const PrimaryRay& ray) {
+            if (ray.bounce < 0) return;
+            BounceRay& br = bounces[ray.bounce];
+            if (br.plane != j) return;
+            const T t = shape_t(shape, br.ray.origin, br.ray.dir, index, br.ray.from);
+            if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, index)) br.hit = {t, index};
+          });
         }
       }
       for (const ScreenBinEntry& e : s_.mirror_bins[j].of_tile(tile)) {
         const PreparedSphere<T>& sp = s_.spheres[e.sphere];
-        const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
-        const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
-        for (int r = er0; r <= er1; ++r) {
-          const PrimaryRay* ray = rays.data() + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
-          for (int x = ex0; x <= ex1; ++x, ++ray) {
-            if (ray->bounce < 0) continue;
-            BounceRay& br = bounces[ray->bounce];
-            if (br.plane != j ||
-                mirror_near(e.near, static_cast<double>(br.t_primary), s_.mirror_slack) >
-                    static_cast<double>(br.hit.t))
-              continue;
-            const T t = sphere_t(br.ray.origin, br.ray.dir, sp.centre, sp.radius, e.sphere,
-                                 br.ray.from);
-            if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, e.sphere))
-              br.hit = {t, e.sphere};
-          }
-        }
+        for_rectangle(e, b, rays.data(), [&](const PrimaryRay& ray) {
+          if (ray.bounce < 0) return;
+          BounceRay& br = bounces[ray.bounce];
+          if (br.plane != j || mirror_near(e.near, static_cast<double>(br.t_primary),
+                                           s_.mirror_slack) > static_cast<double>(br.hit.t))
+            return;
+          const T t =
+              sphere_t(br.ray.origin, br.ray.dir, sp.centre, sp.radius, e.sphere, br.ray.from);
+          if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, e.sphere)) br.hit = {t, e.sphere};
+        });
       }
+    }
+  }
+
+  // Calls f on each of the tile's rays (row by row, `rays` of width b.width()) that lies in
+  // entry e's pixel rectangle.
+  template <class F>
+  static void for_rectangle(const ScreenBinEntry& e, const TileBounds& b, PrimaryRay* rays, F&& f) {
+    const int w = b.width();
+    const int ex0 = std::max<int>(e.x0, b.x0), ex1 = std::min<int>(e.x1, b.x1 - 1);
+    const int er0 = std::max<int>(e.r0, b.r0), er1 = std::min<int>(e.r1, b.r1 - 1);
+    for (int r = er0; r <= er1; ++r) {
+      PrimaryRay* ray = rays + static_cast<size_t>(r - b.r0) * w + (ex0 - b.x0);
+      for (int x = ex0; x <= ex1; ++x, ++ray) f(*ray);
     }
   }
 
