@@ -629,6 +629,61 @@ TEST(KindsExactness, TheRevsurfBoundDropsNoCrossing) {
   expect_bound_drops_no_crossing<float>(42);
 }
 
+// A shadow ray's revsurf test (ShadowLimit: the stepping's bracket decides where it can, the
+// bisection is skipped) answers "0 < t < dist" as the crossing itself does: for rays aimed at
+// the surface from near and far and leaving it, and lights just before, at and just beyond
+// the crossing, far beyond it, at 0 and at infinity, in double and float.
+template <class T>
+void expect_shadow_limit_keeps_the_answer(std::uint64_t seed) {
+  Rng rng(seed);
+  int tested = 0, blocked = 0, early = 0;
+  for (int round = 0; round < 30; ++round) {
+    const Scene scene = kinds_scene(rng, false);
+    const PreparedScene<T> p = prepare_scene<T>(scene, RenderOptions{}, 0);
+    for (const PreparedShape<T>& s : p.shapes) {
+      if (s.kind != PreparedShape<T>::revsurf) continue;
+      const glm::dvec3 axis(s.normal), base(s.point);
+      const double top = revsurf_top(s.surfer, static_cast<double>(s.height));
+      for (int i = 0; i < 400; ++i) {
+        const double y = rng.in(0, top);
+        const glm::dvec3 u = glm::normalize(glm::cross(axis, rng.direction()));
+        const glm::dvec3 target = base + y * axis + revsurf_radius(s.surfer, y) * u;
+        const bool own = rng.chance(0.3);
+        const double far = rng.chance(0.2) ? std::pow(2.0, rng.in(5, 30)) : rng.in(0.5, 20);
+        const glm::dvec3 o = own ? target : target + far * rng.direction();
+        const glm::dvec3 d = own || rng.chance(0.2) ? rng.direction() : target - o;
+        const Vec3<T> ot(o), dt(d);
+        const T t = revsurf_t(s, ot, dt, own);
+        std::vector<T> dists = {T(0), std::numeric_limits<T>::infinity(),
+                                static_cast<T>(rng.in(0, 2 * far))};
+        if (t > 0) {
+          const T inf = std::numeric_limits<T>::infinity();
+          dists.insert(dists.end(), {t, std::nextafter(t, T(0)), std::nextafter(t, inf), t * T(0.5),
+                                     t * T(2), t * T(1 + 1e-6), t * T(1 - 1e-6)});
+        }
+        for (const T dist : dists) {
+          const T v = revsurf_t(s, ot, dt, own, ShadowLimit<T>{dist});
+          const bool want = t > 0 && t < dist;
+          ASSERT_EQ(v > 0 && v < dist, want)
+              << "surfer " << s.surfer << " ray " << i << " own " << own << " t " << t << " dist "
+              << dist << " got " << v;
+          ++tested;
+          blocked += want;
+          early += std::memcmp(&v, &t, sizeof v) != 0;
+        }
+      }
+    }
+  }
+  EXPECT_GT(tested, 30000);
+  EXPECT_GT(blocked, tested / 5);
+  EXPECT_GT(early, blocked / 4) << "the brackets must settle many answers";
+}
+
+TEST(KindsExactness, AShadowRaysRevsurfTestAnswersAsTheCrossingDoes) {
+  expect_shadow_limit_keeps_the_answer<double>(61);
+  expect_shadow_limit_keeps_the_answer<float>(62);
+}
+
 TEST(KindsExactness, ConesTallerThanTheirApexEqualTheLoop) {
   // A cone's radius 4 − 2y/3 is 0 at y = 6; these are 10 to 30 high, so they widen again
   // above their apex (|r(y)|) beyond the radius 4 of their base: their boxes must hold that.

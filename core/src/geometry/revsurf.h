@@ -282,10 +282,21 @@ inline double bisect_wave(const F& f, const RoundingBound& bound, double a, doub
   return b;
 }
 
+// No limit: the crossing itself is wanted.
+struct NoLimit {
+  static bool reached(double) { return false; }
+  static bool before(double, double) { return false; }
+};
+
 // revsurf_first_crossing below, with the certificates' `trust` (RoundingBound); `shown`
-// (tests) learns whether certainly_no_crossing gave the answer.
+// (tests) learns whether certainly_no_crossing gave the answer. A shadow ray asks only
+// whether the crossing comes before its light: with a `limit`, once the stepping has a
+// bracket (t, next] that `limit.before(t, next)` says lies before it, next is returned
+// instead of the bisected crossing, and once `limit.reached(t)` says no crossing beyond t
+// counts, -1 (the stepping's points are the same ones; only the answer's use differs).
+template <class Limit = NoLimit>
 inline double first_crossing(int surfer, double height, const RevsurfRay& r, bool own, double trust,
-                             bool* shown = nullptr) {
+                             bool* shown = nullptr, const Limit& limit = {}) {
   height = revsurf_top(surfer, height);
   double lo = 0, hi = 1e300;
   if (r.dy != 0) {
@@ -328,10 +339,12 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
     }
   }
   for (int i = 0; i < 4096 && t < hi; ++i) {
+    if (limit.reached(t)) return -1;  // every crossing from here lies beyond t
     const double step = std::max(std::abs(v) / lipschitz, min_step);
     const double next = std::min(t + step, hi);
     const double w = f(next);
     if ((v <= 0) != (w <= 0)) {
+      if (limit.before(t, next)) return next;  // the crossing is in (t, next]
       const double b =
           surfer == 1 ? bisect_by_twos(f, t, next, v) : bisect_wave(f, bound, t, next, v, w);
       if (b > 0) return b;
@@ -348,6 +361,15 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
 // `own`: the ray leaves the surface itself; the crossing it starts on does not count.
 inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay& r, bool own) {
   return revsurf_detail::first_crossing(surfer, height, r, own, 1.0);
+}
+
+// For a shadow ray: a value that the caller's test of a crossing (is it before the light?,
+// stated in its own precision by `limit`: see revsurf_detail::first_crossing) answers as it
+// would the crossing itself, without the bisection where the stepping's bracket settles it.
+template <class Limit>
+inline double revsurf_crossing_before(int surfer, double height, const RevsurfRay& r, bool own,
+                                      const Limit& limit) {
+  return revsurf_detail::first_crossing(surfer, height, r, own, 1.0, nullptr, limit);
 }
 
 }  // namespace rayfarm

@@ -62,11 +62,26 @@ inline void frame_coords(const PreparedShape<T>& s, const Vec3<T>& p, T& qx, T& 
   qy = glm::dot(s.v, q);
 }
 
+// A shadow ray's question to a crossing t, as the tracer asks it (t rounded to T, then
+// 0 < t < dist), put to the stepping's brackets (revsurf_detail::first_crossing's limit):
+// every crossing in (t, next] passes when t rounds above 0 and next below dist, and none
+// beyond t does once t rounds to dist or more (rounding is monotone).
+template <class T>
+struct ShadowLimit {
+  T dist;
+  bool reached(double t) const { return !(static_cast<T>(t) < dist); }
+  bool before(double t, double next) const {
+    return static_cast<T>(t) > 0 && static_cast<T>(next) < dist;
+  }
+};
+
 // First t > 0 where the ray meets the surface of revolution (geometry/revsurf.h). Leaving
 // the surface itself (`own`), the crossing it starts on is not one: only a later crossing to
-// the other side counts, so no offset is needed at any scale.
-template <class T>
-T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool own) {
+// the other side counts, so no offset is needed at any scale. With a ShadowLimit, a value
+// that its test answers as it would the crossing.
+template <class T, class Limit = revsurf_detail::NoLimit>
+T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool own,
+            const Limit& limit = {}) {
   const glm::dvec3 dd(d);
   {
     // Most rays pass wide of the surface, or it lies behind them: said in world space, before
@@ -87,7 +102,8 @@ T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool 
   const double y0 = glm::dot(q, a), dy = glm::dot(dd, a);
   const glm::dvec3 r0 = q - y0 * a, rd = dd - dy * a;
   const RevsurfRay ray{y0, dy, glm::dot(r0, r0), glm::dot(r0, rd), glm::dot(rd, rd)};
-  const double t = revsurf_first_crossing(s.surfer, static_cast<double>(s.height), ray, own);
+  const double t =
+      revsurf_crossing_before(s.surfer, static_cast<double>(s.height), ray, own, limit);
   return t > 0 ? static_cast<T>(t) : T(-1);
 }
 
@@ -109,9 +125,14 @@ template <class T>
 }
 
 // Where a ray leaving `from` meets shape `index` (its object number), or a value not > 0.
+// `shadow` (optional): for a shadow ray to a light that far, only whether the answer lies in
+// (0, *shadow) has to be right.
 template <class T>
-T shape_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, int index, Origin from) {
-  if (s.kind == PreparedShape<T>::revsurf) return revsurf_t(s, o, d, index == from.object);
+T shape_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, int index, Origin from,
+          const T* shadow = nullptr) {
+  if (s.kind == PreparedShape<T>::revsurf)
+    return shadow ? revsurf_t(s, o, d, index == from.object, ShadowLimit<T>{*shadow})
+                  : revsurf_t(s, o, d, index == from.object);
   if (index == from.object) return T(-1);  // flat: never met again by a ray leaving it
   const T t = plane_ahead_t(o, d, s.normal, s.point, s.point_scale, from.object >= 0);
   if (!(t > 0)) return T(-1);

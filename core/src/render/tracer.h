@@ -293,7 +293,7 @@ class Tracer {
 
   // Whether shape k (not an object number) lies at 0 < t < dist.
   bool shape_blocks_one(int k, const Vec3<T>& o, const Vec3<T>& d, Origin from, T dist) const {
-    const T t = shape_t(s_.shapes[k], o, d, s_.shape_base() + k, from);
+    const T t = shape_t(s_.shapes[k], o, d, s_.shape_base() + k, from, &dist);
     return t > 0 && t < dist;
   }
 
