@@ -178,10 +178,10 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
 
 namespace {
 
-// The spheres around the other shapes' boxes, for the screen bins and the light buffers:
-// widened like the spheres by `margin(scale)`, 256 epsilons of the coordinates involved
-// (`scale`: the largest |coordinate| of any shape's box), which covers the rounding of the
-// point a shape test finds (it lies on the ray, and within that of the shape).
+// The spheres around the other shapes' boxes, for the screen and mirror bins and the light
+// buffers, widened like the spheres by `margin(scale)`, some epsilons of the coordinates
+// involved (`scale`: the largest |coordinate| of any shape's box), which covers the rounding
+// of the point a shape test finds (it lies on the ray, and within that of the shape).
 template <class T, class Margin>
 std::vector<WidenedSphere> shape_spheres(const PreparedScene<T>& p, Margin margin) {
   std::vector<BvhBox> boxes;
