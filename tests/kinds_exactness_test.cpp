@@ -205,6 +205,11 @@ Scene kinds_scene(Rng& rng, bool translucent) {
 // Eyes in front of the scene, high to one side, far away, and among the objects.
 const glm::dvec3 kEyes[] = {{4, 3, 5}, {0, 8, 6}, {4, 3, 30}, {4, 3, -5}};
 
+std::string seed_and_eye(std::uint64_t seed, const glm::dvec3& eye) {
+  return "seed " + std::to_string(seed) + " eye " + std::to_string(eye.x) + "," +
+         std::to_string(eye.y) + "," + std::to_string(eye.z);
+}
+
 TEST(KindsExactness, RandomScenesOfEveryKindRenderTheSameWithAndWithoutSpecialization) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     Rng rng(seed);
@@ -215,9 +220,8 @@ TEST(KindsExactness, RandomScenesOfEveryKindRenderTheSameWithAndWithoutSpecializ
       scene.cameras[0].viewpoint = eye;
       for (Precision precision : {Precision::f64, Precision::f32})
         for (int spp : {1, 4}) {
-          SCOPED_TRACE("seed " + std::to_string(seed) + " eye " + std::to_string(eye.x) + "," +
-                       std::to_string(eye.y) + "," + std::to_string(eye.z) + " " +
-                       std::string(to_string(precision)) + " spp " + std::to_string(spp));
+          SCOPED_TRACE(seed_and_eye(seed, eye) + " " + std::string(to_string(precision)) + " spp " +
+                       std::to_string(spp));
           RenderOptions o;
           o.precision = precision;
           o.spp = spp;
@@ -443,8 +447,7 @@ TEST(KindsExactness, ShapeBinsHoldEveryPixelAShapeTestHits) {
     Rng rng(300 + seed);
     Scene scene = kinds_scene(rng, false);
     for (const glm::dvec3& eye : {kEyes[0], kEyes[1], kEyes[2]}) {
-      SCOPED_TRACE("seed " + std::to_string(seed) + " eye " + std::to_string(eye.x) + "," +
-                   std::to_string(eye.y) + "," + std::to_string(eye.z));
+      SCOPED_TRACE(seed_and_eye(seed, eye));
       scene.cameras[0].viewpoint = eye;
       expect_shape_bins_hold_every_hit<double>(scene, 64, 48, 1);
       expect_shape_bins_hold_every_hit<float>(scene, 64, 48, 1);
@@ -499,8 +502,7 @@ TEST(KindsExactness, MirrorBinsOverShapesHoldEveryReflectionAShapeTestHits) {
     Rng rng(700 + seed);
     Scene scene = kinds_scene(rng, false);
     for (const glm::dvec3& eye : {kEyes[0], kEyes[1], kEyes[3]}) {
-      SCOPED_TRACE("seed " + std::to_string(seed) + " eye " + std::to_string(eye.x) + "," +
-                   std::to_string(eye.y) + "," + std::to_string(eye.z));
+      SCOPED_TRACE(seed_and_eye(seed, eye));
       scene.cameras[0].viewpoint = eye;
       ASSERT_FALSE(prepare_scene<double>(scene, RenderOptions{}, 0).mirror_shape_bins.empty());
       hits += expect_mirror_shape_bins_hold_every_hit<double>(scene, 80, 60);

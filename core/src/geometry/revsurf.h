@@ -358,17 +358,12 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
 }  // namespace revsurf_detail
 
 // The first t > 0 at which the ray crosses the surface within 0 <= y <= height, or -1.
-// `own`: the ray leaves the surface itself; the crossing it starts on does not count.
-inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay& r, bool own) {
-  return revsurf_detail::first_crossing(surfer, height, r, own, 1.0);
-}
-
-// For a shadow ray: a value that the caller's test of a crossing (is it before the light?,
-// stated in its own precision by `limit`: see revsurf_detail::first_crossing) answers as it
-// would the crossing itself, without the bisection where the stepping's bracket settles it.
-template <class Limit>
-inline double revsurf_crossing_before(int surfer, double height, const RevsurfRay& r, bool own,
-                                      const Limit& limit) {
+// `own`: the ray leaves the surface itself; the crossing it starts on does not count. With a
+// `limit` (a shadow ray's question, in the caller's precision: see
+// revsurf_detail::first_crossing), a value that question answers as it would the crossing.
+template <class Limit = revsurf_detail::NoLimit>
+inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay& r, bool own,
+                                     const Limit& limit = {}) {
   return revsurf_detail::first_crossing(surfer, height, r, own, 1.0, nullptr, limit);
 }
 

@@ -178,24 +178,41 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
 
 namespace {
 
-// The spheres around the other shapes' boxes, for the screen and mirror bins and the light
-// buffers, widened like the spheres by `margin(scale)`, some epsilons of the coordinates
-// involved (`scale`: the largest |coordinate| of any shape's box), which covers the rounding
-// of the point a shape test finds (it lies on the ray, and within that of the shape).
-template <class T, class Margin>
-std::vector<WidenedSphere> shape_spheres(const PreparedScene<T>& p, Margin margin) {
-  std::vector<BvhBox> boxes;
-  double scale = 0;
-  for (const PreparedShape<T>& s : p.shapes) {
-    boxes.push_back(shape_box(s));
-    for (const glm::dvec3& c : {boxes.back().lo, boxes.back().hi})
-      scale = std::max({scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
-  }
-  const double m = margin(scale);
+// The scene's spheres, each widened by `margin`.
+template <class T>
+std::vector<WidenedSphere> widened_spheres(const PreparedScene<T>& p, double margin) {
   std::vector<WidenedSphere> out;
-  out.reserve(boxes.size());
-  for (const BvhBox& b : boxes)
-    out.push_back({(b.lo + b.hi) / 2.0, glm::length(b.hi - b.lo) / 2 + m});
+  out.reserve(p.spheres.size());
+  for (const PreparedSphere<T>& s : p.spheres)
+    out.push_back({glm::dvec3(s.centre), static_cast<double>(s.radius) + margin});
+  return out;
+}
+
+// The spheres around the other shapes' boxes, for the screen and mirror bins and the light
+// buffers, and the largest |coordinate| of any box (`scale`). Each use widens them like the
+// spheres, by some epsilons of the coordinates involved, which covers the rounding of the
+// point a shape test finds (it lies on the ray, and within that of the shape).
+struct ShapeBounds {
+  std::vector<WidenedSphere> tight;
+  double scale = 0;
+
+  std::vector<WidenedSphere> widened(double margin) const {
+    std::vector<WidenedSphere> out = tight;
+    for (WidenedSphere& s : out) s.radius += margin;
+    return out;
+  }
+};
+
+template <class T>
+ShapeBounds shape_bounds(const PreparedScene<T>& p) {
+  ShapeBounds out;
+  out.tight.reserve(p.shapes.size());
+  for (const PreparedShape<T>& s : p.shapes) {
+    const BvhBox b = shape_box(s);
+    for (const glm::dvec3& c : {b.lo, b.hi})
+      out.scale = std::max({out.scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+    out.tight.push_back({(b.lo + b.hi) / 2.0, glm::length(b.hi - b.lo) / 2});
+  }
   return out;
 }
 
@@ -207,8 +224,8 @@ std::vector<WidenedSphere> shape_spheres(const PreparedScene<T>& p, Margin margi
 // from the spheres about their boxes widened likewise (with their coordinates among the
 // scales: a shape's hit lies in its box, so the ray is at most |p| + those long there).
 template <class T>
-void add_mirror_bins(PreparedScene<T>& p, double view, double scale, double pad_x,
-                       double pad_y) {
+void add_mirror_bins(PreparedScene<T>& p, const ShapeBounds& shapes, double view, double scale,
+                     double pad_x, double pad_y) {
   if (!p.features.reflection || p.max_depth < 1) return;
   const double eps = std::numeric_limits<T>::epsilon();
   const double reach = 4 * view;
@@ -222,23 +239,18 @@ void add_mirror_bins(PreparedScene<T>& p, double view, double scale, double pad_
     const glm::dvec3 q(pl.point);
     const double plane_scale = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)});
     const double margin = 1024 * eps * (reach + view + scale + plane_scale);
-    std::vector<WidenedSphere> spheres;
-    spheres.reserve(p.spheres.size());
-    for (const PreparedSphere<T>& s : p.spheres)
-      spheres.push_back({glm::dvec3(s.centre), static_cast<double>(s.radius) + margin});
-    ScreenBins bins =
-        build_mirror_bins(camera, spheres, glm::dvec3(pl.normal), q, kTileSize, kMaxCoverage);
+    ScreenBins bins = build_mirror_bins(camera, widened_spheres(p, margin), glm::dvec3(pl.normal),
+                                        q, kTileSize, kMaxCoverage);
     if (bins.empty()) continue;
     p.mirror_bins.resize(p.planes.size());
     p.mirror_bins[j] = std::move(bins);
     p.features.mirror_bins = true;
-    if (p.shapes.empty()) continue;
-    const std::vector<WidenedSphere> shapes = shape_spheres(p, [&](double shape_scale) {
-      return 1024 * eps * (reach + view + std::max(scale, shape_scale) + plane_scale);
-    });
+    if (shapes.tight.empty()) continue;
+    const double shape_margin =
+        1024 * eps * (reach + view + std::max(scale, shapes.scale) + plane_scale);
     p.mirror_shape_bins.resize(p.planes.size());
-    p.mirror_shape_bins[j] =
-        build_mirror_bins(camera, shapes, glm::dvec3(pl.normal), q, kTileSize, kMaxCoverage);
+    p.mirror_shape_bins[j] = build_mirror_bins(camera, shapes.widened(shape_margin),
+                                               glm::dvec3(pl.normal), q, kTileSize, kMaxCoverage);
   }
   p.mirror_reach = reach;
   // The sphere test's near root can fall short by about sqrt(epsilon) of the distance.
@@ -267,13 +279,7 @@ void build_ray_culling(PreparedScene<T>& p) {
   // within `reach` (farther ones are not answered from the buffers) and the scene's.
   const double eps = std::numeric_limits<T>::epsilon();
   const double reach = 4 * scale;
-  auto widened = [&](double margin) {
-    std::vector<WidenedSphere> out;
-    out.reserve(p.spheres.size());
-    for (const PreparedSphere<T>& s : p.spheres)
-      out.push_back({glm::dvec3(s.centre), static_cast<double>(s.radius) + margin});
-    return out;
-  };
+  const ShapeBounds shapes = shape_bounds(p);
 
   // A primary ray's direction, from the pixel's screen point, errs by a few epsilons of the
   // window and eye coordinates; in pixels, padded 16-fold, plus half a pixel to spare and
@@ -286,18 +292,17 @@ void build_ray_culling(PreparedScene<T>& p) {
   constexpr double kMaxPad = 64, kMaxCoverage = 64;
   if (pad_x <= kMaxPad && pad_y <= kMaxPad) {
     const ScreenCamera camera{glm::dvec3(p.eye), ww, wh, p.width, p.height, pad_x, pad_y};
-    p.screen_bins =
-        build_screen_bins(camera, widened(256 * eps * 2 * view), kTileSize, kMaxCoverage);
+    p.screen_bins = build_screen_bins(camera, widened_spheres(p, 256 * eps * 2 * view), kTileSize,
+                                      kMaxCoverage);
     if (!p.screen_bins.empty() && !p.shapes.empty())
-      p.shape_bins = build_screen_bins(
-          camera,
-          shape_spheres(p, [&](double shapes) { return 256 * eps * 2 * std::max(view, shapes); }),
-          kTileSize, kMaxCoverage);
+      p.shape_bins =
+          build_screen_bins(camera, shapes.widened(256 * eps * 2 * std::max(view, shapes.scale)),
+                            kTileSize, kMaxCoverage);
   }
   p.features.screen_bins = !p.screen_bins.empty();
   // The rest stands in for the sphere hierarchy: where there is none, the loop is cheaper.
   if (p.spheres.size() < kBvhMinSpheres) return;
-  if (pad_x <= kMaxPad && pad_y <= kMaxPad) add_mirror_bins(p, view, scale, pad_x, pad_y);
+  if (pad_x <= kMaxPad && pad_y <= kMaxPad) add_mirror_bins(p, shapes, view, scale, pad_x, pad_y);
 
   // Light buffers answer "is anything in the way"; through translucent objects the shadow
   // ray must find every one on its way, so they step aside.
@@ -305,12 +310,10 @@ void build_ray_culling(PreparedScene<T>& p) {
   // The other shapes go in too, after the spheres (LightBuffer's blocker numbers), so that a
   // shadow ray the buffer answers needs no walk of their hierarchy: a shape's hit on the
   // segment lies in the sphere about its box, which is listed wherever that segment can go.
-  std::vector<WidenedSphere> blockers = widened(256 * eps * (reach + scale));
-  if (!p.shapes.empty()) {
-    const std::vector<WidenedSphere> more = shape_spheres(
-        p, [&](double shapes) { return 256 * eps * (reach + std::max(scale, shapes)); });
-    blockers.insert(blockers.end(), more.begin(), more.end());
-  }
+  std::vector<WidenedSphere> blockers = widened_spheres(p, 256 * eps * (reach + scale));
+  const std::vector<WidenedSphere> more =
+      shapes.widened(256 * eps * (reach + std::max(scale, shapes.scale)));
+  blockers.insert(blockers.end(), more.begin(), more.end());
   // Each buffer costs about one pass over the blockers and a few entries per blocker: past
   // these budgets (time, and memory a small multiple of the scene's), the rest of the
   // lights keep the hierarchies.

@@ -102,8 +102,7 @@ T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool 
   const double y0 = glm::dot(q, a), dy = glm::dot(dd, a);
   const glm::dvec3 r0 = q - y0 * a, rd = dd - dy * a;
   const RevsurfRay ray{y0, dy, glm::dot(r0, r0), glm::dot(r0, rd), glm::dot(rd, rd)};
-  const double t =
-      revsurf_crossing_before(s.surfer, static_cast<double>(s.height), ray, own, limit);
+  const double t = revsurf_first_crossing(s.surfer, static_cast<double>(s.height), ray, own, limit);
   return t > 0 ? static_cast<T>(t) : T(-1);
 }
 
