@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -403,9 +404,11 @@ TEST(KindsExactness, LightBuffersListingShapesCastTheLoopsShadows) {
 }
 
 // Every pixel whose primary ray a shape's own test hits lies in that shape's rectangle, in
-// the shape bin of its tile (the bins list shapes by the spheres around their boxes).
-// `min_hits` (-1: a twentieth of the pixels) keeps the check from passing on a scene whose
-// shapes are out of sight; `hits_out` (optional) adds how many pixel and shape pairs hit.
+// the shape bin of its tile (the bins list shapes by the spheres around their boxes), and a
+// surface of revolution's hit is no nearer than its entry's near bound (first_hits skips it
+// behind nearer hits). `min_hits` (-1: a twentieth of the pixels) keeps the check from
+// passing on a scene whose shapes are out of sight; `hits_out` (optional) adds how many pixel
+// and shape pairs hit.
 template <class T>
 void expect_shape_bins_hold_every_hit(const Scene& scene, int width, int height, int spp,
                                       int min_hits = -1, int* hits_out = nullptr) {
@@ -421,7 +424,7 @@ void expect_shape_bins_hold_every_hit(const Scene& scene, int width, int height,
   for (int t = 0; t < p.shape_bins.tiles_x * p.shape_bins.tiles_y; ++t)
     for (const ScreenBinEntry& e : p.shape_bins.of_tile(t)) entry[{t, e.sphere}] = &e;
   const Tracer<T> tracer(p);
-  int hits = 0;
+  int hits = 0, revsurf_hits = 0;
   for (int pass = 0; pass < spp; ++pass)
     for (int r = 0; r < height; ++r)
       for (int x = 0; x < width; ++x) {
@@ -429,16 +432,24 @@ void expect_shape_bins_hold_every_hit(const Scene& scene, int width, int height,
         ASSERT_TRUE(d);
         const int tile = (r / kTileSize) * p.shape_bins.tiles_x + x / kTileSize;
         for (int k = 0; k < static_cast<int>(p.shapes.size()); ++k) {
-          if (!(shape_t(p.shapes[k], p.eye, *d, p.shape_base() + k, Origin{}) > 0)) continue;
+          const T t = shape_t(p.shapes[k], p.eye, *d, p.shape_base() + k, Origin{});
+          if (!(t > 0)) continue;
           ++hits;
           auto it = entry.find({tile, k});
           ASSERT_NE(it, entry.end()) << "shape " << k << " pixel " << x << "," << r;
           const ScreenBinEntry& e = *it->second;
           EXPECT_TRUE(x >= e.x0 && x <= e.x1 && r >= e.r0 && r <= e.r1)
               << "shape " << k << " pixel " << x << "," << r;
+          if (p.shapes[k].kind != PreparedShape<T>::revsurf) continue;
+          ++revsurf_hits;
+          EXPECT_LE(static_cast<double>(e.near), static_cast<double>(t))
+              << "shape " << k << " pixel " << x << "," << r;
         }
       }
   EXPECT_GE(hits, min_hits < 0 ? width * height / 20 : min_hits);
+  if (min_hits < 0) {
+    EXPECT_GT(revsurf_hits, 0) << "surfaces of revolution in sight";
+  }
   if (hits_out) *hits_out += hits;
 }
 
@@ -458,9 +469,11 @@ TEST(KindsExactness, ShapeBinsHoldEveryPixelAShapeTestHits) {
 
 // Every pixel whose reflection ray off a plane with mirror bins meets a shape (by the shape's
 // own test, on the ray the tracer sends) lies in that shape's rectangle in the plane's
-// mirror bins over shapes.
+// mirror bins over shapes, and a surface of revolution's hit is no nearer than mirror_near
+// of its entry (bounce_hits skips it behind nearer hits).
 template <class T>
-int expect_mirror_shape_bins_hold_every_hit(const Scene& scene, int width, int height) {
+int expect_mirror_shape_bins_hold_every_hit(const Scene& scene, int width, int height,
+                                            int& revsurf_hits) {
   RenderOptions o;
   o.width = width;
   o.height = height;
@@ -485,11 +498,20 @@ int expect_mirror_shape_bins_hold_every_hit(const Scene& scene, int width, int h
       const int tile = (r / kTileSize) * bins.tiles_x + x / kTileSize;
       for (int k = 0; k < static_cast<int>(p.shapes.size()); ++k) {
         const int index = p.shape_base() + k;
-        if (!(shape_t(p.shapes[k], bounce->origin, bounce->dir, index, bounce->from) > 0)) continue;
+        const T t = shape_t(p.shapes[k], bounce->origin, bounce->dir, index, bounce->from);
+        if (!(t > 0)) continue;
         ++hits;
         bool listed = false;
-        for (const ScreenBinEntry& e : bins.of_tile(tile))
-          listed = listed || (e.sphere == k && x >= e.x0 && x <= e.x1 && r >= e.r0 && r <= e.r1);
+        for (const ScreenBinEntry& e : bins.of_tile(tile)) {
+          if (!(e.sphere == k && x >= e.x0 && x <= e.x1 && r >= e.r0 && r <= e.r1)) continue;
+          listed = true;
+          if (p.shapes[k].kind == PreparedShape<T>::revsurf) {
+            ++revsurf_hits;
+            EXPECT_LE(mirror_near(e.near, static_cast<double>(first.t), p.mirror_slack),
+                      static_cast<double>(t))
+                << "shape " << k << " pixel " << x << "," << r << " plane " << j;
+          }
+        }
         EXPECT_TRUE(listed) << "shape " << k << " pixel " << x << "," << r << " plane " << j;
       }
     }
@@ -497,7 +519,7 @@ int expect_mirror_shape_bins_hold_every_hit(const Scene& scene, int width, int h
 }
 
 TEST(KindsExactness, MirrorBinsOverShapesHoldEveryReflectionAShapeTestHits) {
-  int hits = 0;
+  int hits = 0, revsurf_hits = 0;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
     Rng rng(700 + seed);
     Scene scene = kinds_scene(rng, false);
@@ -505,11 +527,14 @@ TEST(KindsExactness, MirrorBinsOverShapesHoldEveryReflectionAShapeTestHits) {
       SCOPED_TRACE(seed_and_eye(seed, eye));
       scene.cameras[0].viewpoint = eye;
       ASSERT_FALSE(prepare_scene<double>(scene, RenderOptions{}, 0).mirror_shape_bins.empty());
-      hits += expect_mirror_shape_bins_hold_every_hit<double>(scene, 80, 60);
-      hits += expect_mirror_shape_bins_hold_every_hit<float>(scene, 80, 60);
+      hits += expect_mirror_shape_bins_hold_every_hit<double>(scene, 80, 60, revsurf_hits);
+      hits += expect_mirror_shape_bins_hold_every_hit<float>(scene, 80, 60, revsurf_hits);
     }
   }
   EXPECT_GT(hits, 1000) << "reflections meet the shapes";
+  EXPECT_GT(revsurf_hits, 100) << "reflections meet surfaces of revolution";
+  std::printf("%d reflections meet shapes, %d of them surfaces of revolution\n", hits,
+              revsurf_hits);
 }
 
 // A few shapes and fewer spheres than pay for a hierarchy: the screen bins alone (every

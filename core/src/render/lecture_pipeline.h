@@ -111,20 +111,23 @@ class LecturePipeline {
     if (!binned) return;
     const TileGrid grid(s_.width, s_.height);
     const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
-    // Shapes are not skipped by their near bound: a grazing ray's plane distance can fall
-    // short of it by far more than the rounding of the point it finds.
     const int shape_base = s_.shape_base();
     const std::span<const ScreenBinEntry> shapes =
         s_.shape_bins.empty() ? std::span<const ScreenBinEntry>() : s_.shape_bins.of_tile(tile);
-    for (const ScreenBinEntry& e : shapes) {
-      const PreparedShape<T>& shape = s_.shapes[e.sphere];
-      const int index = shape_base + e.sphere;
-      for_rectangle(e, b, rays.data(), [&](PrimaryRay& ray) {
-        if (!ray.dir) return;
-        const T t = shape_t(shape, s_.eye, *ray.dir, index, Origin{});
-        if (t > 0 && t <= t_max && ray.hit.beaten_by(t, index)) ray.hit = {t, index};
-      });
-    }
+    auto test_shapes = [&](bool searched) {
+      for (const ScreenBinEntry& e : shapes) {
+        const PreparedShape<T>& shape = s_.shapes[e.sphere];
+        if (is_searched(shape) != searched) continue;
+        const int index = shape_base + e.sphere;
+        const double near = searched ? e.near : -1.0;
+        for_rectangle(e, b, rays.data(), [&](PrimaryRay& ray) {
+          if (!ray.dir || near > static_cast<double>(ray.hit.t)) return;
+          const T t = shape_t(shape, s_.eye, *ray.dir, index, Origin{});
+          if (t > 0 && t <= t_max && ray.hit.beaten_by(t, index)) ray.hit = {t, index};
+        });
+      }
+    };
+    test_shapes(false);
     for (const ScreenBinEntry& e : s_.screen_bins.of_tile(tile)) {
       const PreparedSphere<T>& sp = s_.spheres[e.sphere];
       const double near = e.near;
@@ -135,6 +138,17 @@ class LecturePipeline {
         if (t > 0 && t <= t_max && best.beaten_by(t, e.sphere)) best = {t, e.sphere};
       });
     }
+    test_shapes(true);
+  }
+
+  // Flat shapes go before the spheres and are never skipped by their near bound: a grazing
+  // ray's plane distance can fall short of it by far more than the rounding of the point it
+  // finds. A surface of revolution is searched, at tens of times a sphere's cost, so it goes
+  // after them and is skipped where a nearer hit than all of it is known: its crossing is a
+  // point where the computed |radial|² − r² changes sign, within rounding of the surface,
+  // hence in the widened sphere about its box, at a distance no less than that sphere's.
+  static bool is_searched(const PreparedShape<T>& shape) {
+    return shape.kind == PreparedShape<T>::revsurf;
   }
 
   // The closest hit of each reflection ray the tile's primary rays send off planes with
@@ -167,21 +181,28 @@ class LecturePipeline {
     const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
     for (int j = 0; j < planes; ++j) {
       if (!(used & (1u << std::min(j, 31))) || s_.mirror_bins[j].empty()) continue;
-      // Shapes first, on every pixel of their rectangles (as in first_hits, not skipped by
-      // their near bound), then the spheres.
-      if (const ScreenBins* shapes = shape_bins(j)) {
-        for (const ScreenBinEntry& e : shapes->of_tile(tile)) {
+      // Flat shapes first, on every pixel of their rectangles, then the spheres, then the
+      // searched shapes where no hit nearer than all of them is known (as in first_hits).
+      const std::span<const ScreenBinEntry> shapes =
+          shape_bins(j) ? shape_bins(j)->of_tile(tile) : std::span<const ScreenBinEntry>();
+      auto test_shapes = [&](bool searched) {
+        for (const ScreenBinEntry& e : shapes) {
           const PreparedShape<T>& shape = s_.shapes[e.sphere];
+          if (is_searched(shape) != searched) continue;
           const int index = s_.shape_base() + e.sphere;
           for_rectangle(e, b, rays.data(), [&](const PrimaryRay& ray) {
             if (ray.bounce < 0) return;
             BounceRay& br = bounces[ray.bounce];
-            if (br.plane != j) return;
+            if (br.plane != j ||
+                (searched && mirror_near(e.near, static_cast<double>(br.t_primary),
+                                         s_.mirror_slack) > static_cast<double>(br.hit.t)))
+              return;
             const T t = shape_t(shape, br.ray.origin, br.ray.dir, index, br.ray.from);
             if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, index)) br.hit = {t, index};
           });
         }
-      }
+      };
+      test_shapes(false);
       for (const ScreenBinEntry& e : s_.mirror_bins[j].of_tile(tile)) {
         const PreparedSphere<T>& sp = s_.spheres[e.sphere];
         for_rectangle(e, b, rays.data(), [&](const PrimaryRay& ray) {
@@ -195,6 +216,7 @@ class LecturePipeline {
           if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, e.sphere)) br.hit = {t, e.sphere};
         });
       }
+      test_shapes(true);
     }
   }
 
