@@ -101,6 +101,42 @@ TEST(LargePages, SmallBlocksComeFromAHeapMarkedForHugePages) {
   EXPECT_TRUE(found) << "the block's mapping is not in smaps";
 }
 
+// Nor do small blocks fill 4 KB pages first (a fault each, some 12 us on the virtual machines
+// measured): below the first marked 2 MB boundary the heap is one block that is never
+// touched, and nothing touched the marked range before it was marked. 8 MB of small blocks
+// leave under 256 KB of the heap in 4 KB pages (what was touched before the program
+// started; 20 KB here), where filling the heap up to its first 2 MB boundary in 4 KB pages
+// would leave as much as lies below it (0 to 2 MB, with the heap's random start), and 2 MB
+// more if the marked range's first 2 MB had a 4 KB page before it was marked.
+TEST(LargePages, SmallBlocksDoNotFill4KiBPagesFirst) {
+  std::ifstream thp("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string mode;
+  if (!std::getline(thp, mode) || mode.find("[never]") != std::string::npos)
+    GTEST_SKIP() << "no transparent huge pages here";
+  std::vector<std::unique_ptr<char[]>> blocks;
+  for (int i = 0; i < 40000; ++i) {
+    blocks.push_back(std::make_unique<char[]>(200));
+    std::memset(blocks.back().get(), 1, 200);
+  }
+  std::ifstream smaps("/proc/self/smaps");
+  ASSERT_TRUE(smaps) << "no /proc/self/smaps";
+  std::string line;
+  bool heap = false;
+  long rss_kb = 0, huge_kb = 0;
+  while (std::getline(smaps, line)) {
+    std::uintptr_t lo = 0, hi = 0;
+    if (std::sscanf(line.c_str(), "%lx-%lx ", &lo, &hi) == 2) {
+      heap = line.find("[heap]") != std::string::npos;
+      continue;
+    }
+    long kb = 0;
+    if (heap && std::sscanf(line.c_str(), "Rss: %ld kB", &kb) == 1) rss_kb += kb;
+    if (heap && std::sscanf(line.c_str(), "AnonHugePages: %ld kB", &kb) == 1) huge_kb += kb;
+  }
+  EXPECT_GE(huge_kb, 6 * 1024) << "the blocks are in huge pages";
+  EXPECT_LT(rss_kb - huge_kb, 256) << "kB of " << rss_kb << " kB of heap in 4 KB pages";
+}
+
 TEST(LargePages, EverySizeAndAlignmentIsUsable) {
   for (std::size_t size : {std::size_t{0}, std::size_t{1}, std::size_t{100}, kMiB, 3 * kMiB}) {
     for (std::size_t align : {std::size_t{8}, std::size_t{16}, std::size_t{64}, std::size_t{4096}}) {
