@@ -3,14 +3,16 @@
 // megabytes each (the text, the objects, the hierarchy and its build arrays, the bins and
 // buffers), each touched once: in 4 KB pages that is some 25,000 page faults, which on the
 // virtual machines measured cost more than parsing the file (random-100k 0.63 -> 0.46 s).
-// A block of 256 KB or more gets a mapping of its own, a multiple of 2 MB aligned to 2 MB and
+// A block of 2 MB or more gets a mapping of its own, a multiple of 2 MB aligned to 2 MB and
 // marked MADV_HUGEPAGE (transparent huge pages in `madvise` mode, Debian's default), so it
-// faults once per 2 MB; smaller ones go to malloc as before. From 256 KB, not 2 MB: an
-// 800x600 image (1.44 MB) took 4.2 ms to touch in 4 KB pages there and 0.2 ms in one huge
-// page, a tenth of the lecture scene's run, and the preparation's arrays of a few hundred
-// KB (a rectangle per sphere, a distance per sphere) cost grid-8000 and random-100k 8-15%
-// of their runs in 4 KB faults. The rounding up to 2 MB is not lost: freed, a mapping is
-// kept for the next blocks (below).
+// faults once per 2 MB. Smaller ones go to malloc, whose heap is on huge pages too (below):
+// the preparation's arrays of a few hundred KB cost grid-8000 and random-100k 8-15% of
+// their runs in 4 KB faults, and in the heap they share huge pages instead of holding a
+// 2 MB mapping each (as from 256 KB before): 8 MB less memory for kinds-mix (20.3 -> 12.3
+// MB) and grid-8000 (14.3 -> 6.3), 4 more for shallow-60k, whose freed text no longer holds
+// them. That is what counts once the machine has been idle a few seconds, when memory new to
+// the process costs 0.9-1.7 ms per MB (0.07 when it was freed just before). Freed, a
+// mapping is kept for the next large blocks (below).
 #include <malloc.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -25,7 +27,7 @@
 namespace {
 
 constexpr std::size_t kHuge = std::size_t{1} << 21;
-constexpr std::size_t kMinBlock = std::size_t{1} << 18;
+constexpr std::size_t kMinBlock = std::size_t{1} << 21;
 // The block starts this far into its mapping, where the mapping's length is kept; it also
 // keeps every alignment up to 64 (the hierarchy's nodes ask for 64).
 constexpr std::size_t kHeader = 64;
@@ -143,10 +145,12 @@ void release(void* p) noexcept {
   if (p && !unmap_large(p)) std::free(p);
 }
 
-// The small blocks' heap (glibc's, grown with brk) on huge pages too: each growth of the
-// heap is 64 MB more than asked, that range is marked MADV_HUGEPAGE, and one arena serves
-// every thread (the others' arenas would be 4 KB pages again). A scene that the general
-// parser reads (any kind beyond spheres and planes) makes thousands of small blocks.
+// The small blocks' heap (glibc's, grown with brk) on huge pages too: its first growth
+// reserves 256 MB (address space; pages are touched as used), that range is marked
+// MADV_HUGEPAGE and never trimmed, and one arena serves every thread (the others' arenas
+// would be 4 KB pages again). A scene that the general parser reads (any kind beyond
+// spheres and planes) makes thousands of small blocks, and the preparation blocks of up to
+// 2 MB. Past 256 MB the heap grows 64 MB at a time, unmarked.
 //
 // A 4 KB page costs a fault of its own (12 us each on the virtual machines measured, some
 // 3 ms per MB, against 0.07 ms per MB in recycled huge pages), and a 2 MB range with one 4 KB
@@ -156,11 +160,11 @@ void release(void* p) noexcept {
 void* volatile heap_filler = nullptr;
 
 [[gnu::constructor]] void heap_on_huge_pages() {
-  mallopt(M_TOP_PAD, 64 << 20);
-  mallopt(M_TRIM_THRESHOLD, 256 << 20);
+  mallopt(M_TOP_PAD, 256 << 20);
+  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   mallopt(M_ARENA_MAX, 1);
   // Blocks up to 4 MB from the heap, not mmap: the filler below, and C libraries' buffers
-  // (the operator new above maps its own from 256 KB).
+  // (the operator new above maps its own from 2 MB).
   mallopt(M_MMAP_THRESHOLD, 4 << 20);
   // The top chunk (where new blocks are cut) runs from `start` to the break; pages below
   // the break may have been touched, none above.
@@ -168,11 +172,12 @@ void* volatile heap_filler = nullptr;
   const std::uintptr_t start = brk - mallinfo2().keepcost;
   std::uintptr_t from = (brk + kHuge - 1) & ~(kHuge - 1);
   if (from - brk < 2 * 4096) from += kHuge;  // room for the growth's header below it
-  // Grow the heap by the pad: one block just larger than the top chunk, whose end (where
+  // Grow the heap by the reserve: one block just larger than the top chunk, whose end (where
   // malloc writes the next chunk's header) stays below `from`.
   void* grow = std::malloc(brk - start + 64);
   const std::uintptr_t top = reinterpret_cast<std::uintptr_t>(sbrk(0));
   std::free(grow);
+  mallopt(M_TOP_PAD, 64 << 20);
   if (!grow || top < from + kHuge) return;
   madvise(reinterpret_cast<void*>(from), (top & ~(kHuge - 1)) - from, MADV_HUGEPAGE);
   // The filler: a block from `start` to `from` (glibc's chunk of a request n is n + 8
