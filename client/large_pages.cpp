@@ -146,11 +146,11 @@ void release(void* p) noexcept {
 }
 
 // The small blocks' heap (glibc's, grown with brk) on huge pages too: its first growth
-// reserves 256 MB (address space; pages are touched as used), that range is marked
+// reserves 128 MB (address space; pages are touched as used), that range is marked
 // MADV_HUGEPAGE and never trimmed, and one arena serves every thread (the others' arenas
 // would be 4 KB pages again). A scene that the general parser reads (any kind beyond
 // spheres and planes) makes thousands of small blocks, and the preparation blocks of up to
-// 2 MB. Past 256 MB the heap grows 64 MB at a time, unmarked.
+// 2 MB. Past 128 MB the heap grows 64 MB at a time, unmarked.
 //
 // A 4 KB page costs a fault of its own (12 us each on the virtual machines measured, some
 // 3 ms per MB, against 0.07 ms per MB in recycled huge pages), and a 2 MB range with one 4 KB
@@ -160,7 +160,7 @@ void release(void* p) noexcept {
 void* volatile heap_filler = nullptr;
 
 [[gnu::constructor]] void heap_on_huge_pages() {
-  mallopt(M_TOP_PAD, 256 << 20);
+  mallopt(M_TOP_PAD, 128 << 20);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
   mallopt(M_ARENA_MAX, 1);
   // Blocks up to 4 MB from the heap, not mmap: the filler below, and C libraries' buffers
