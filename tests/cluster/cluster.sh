@@ -9,6 +9,9 @@
 # on their node, seen from every node. Usage: cluster.sh BUILD_DIR.
 # Exit 77 (skipped) without redis-server, unless RAYFARM_REQUIRE_REDIS=1.
 set -euo pipefail
+# With pipefail, `A | grep -q` fails now and then: grep -q leaves at its first match and A
+# dies writing to the closed pipe. Checks here read to the end (grep >/dev/null) or match
+# without a pipe.
 build=$(cd "$1" && pwd)
 src=$(cd "$(dirname "$0")/../.." && pwd)
 cd "$src"
@@ -97,7 +100,7 @@ for n in 1 2 3; do
   [ "$(curl -s "$(url "$n" "/jobs/$id")" | field '["progress"]')" = 1.0 ] || fail "node $n: progress"
   curl -s -o "$dir/node$n.png" "$(url "$n" "/jobs/$id/image")"
   cmp "$dir/node$n.png" "$dir/local.png" || fail "node $n serves another image"
-  curl -s "$(url "$n" /jobs)" | grep -q "$id" || fail "node $n: GET /jobs lacks the job"
+  curl -s "$(url "$n" /jobs)" | grep "$id" >/dev/null || fail "node $n: GET /jobs lacks the job"
 done
 code=$(curl -s -o /dev/null -w '%{http_code}' "$(url 3 /jobs/0123456789abcdef0123456789abcdef)")
 [ "$code" = 404 ] || fail "an unknown job gave $code"
@@ -162,7 +165,7 @@ again=$(curl -s -D "$dir/again.h" -H "Idempotency-Key: $k" --data-binary @"$dir/
 code=$(curl -s -o "$dir/reused.json" -w '%{http_code}' -H "Idempotency-Key: $k" --data-binary @"$dir/warn.txt" "$(url 3 "/render?width=160&height=120&spp=9")")
 [ "$code" = 422 ] && grep -q idempotency_key_reused "$dir/reused.json" || fail "the key reused on node 3 gave $code $(cat "$dir/reused.json")"
 for n in 1 3; do
-  curl -s "$(url "$n" "/jobs/$first")" | grep -q '"warnings": *\[ *{' || fail "node $n does not show the job's warnings"
+  curl -s "$(url "$n" "/jobs/$first")" | grep '"warnings": *\[ *{' >/dev/null || fail "node $n does not show the job's warnings"
 done
 echo "cluster: (i) an Idempotency-Key and a job's warnings hold on every node"
 
@@ -206,8 +209,8 @@ echo "cluster: (f) node 1 frozen past its lease: the job finished elsewhere, its
 # (g) Redis out of memory: submissions get 503 + Retry-After, reads still answer, no crash.
 rcli config set maxmemory 1 >/dev/null
 headers=$(curl -s -D - -o "$dir/oom.json" --data-binary @scenes/cho.txt "$(url 2 "/render?width=64&height=48&seed=13")")
-echo "$headers" | head -1 | grep -q " 503" || fail "POST /render with Redis out of memory: $(echo "$headers" | head -1) $(cat "$dir/oom.json")"
-echo "$headers" | grep -qi '^Retry-After:' || fail "the out-of-memory 503 has no Retry-After"
+[[ ${headers%%$'\n'*} == *" 503"* ]] || fail "POST /render with Redis out of memory: ${headers%%$'\n'*} $(cat "$dir/oom.json")"
+grep -qi '^Retry-After:' <<<"$headers" || fail "the out-of-memory 503 has no Retry-After"
 [ "$(state_on 2 "$big")" = done ] || fail "GET /jobs/ID with Redis out of memory"
 rcli config set maxmemory 0 >/dev/null
 code=$(curl -s -o /dev/null -w '%{http_code}' --data-binary @scenes/cho.txt "$(url 2 "/render?width=64&height=48&seed=13&wait=1")")
@@ -223,7 +226,7 @@ tex=$(cd scenes && curl -s -F scene=@textures.txt -F 'textures/bricks.ppm=@textu
 for _ in $(seq 100); do [ "$(state_on 2 "$tex")" = running ] && break; sleep 0.05; done
 kill -9 "${pids[2]}"; wait "${pids[2]}" 2>/dev/null || true; pids[2]=""
 for _ in $(seq 100); do [ "$(state_on 1 "$tex")" = failed ] && break; sleep 0.1; done
-curl -s "$(url 1 "/jobs/$tex")" | grep -q '"code": *"node_lost"' \
+curl -s "$(url 1 "/jobs/$tex")" | grep '"code": *"node_lost"' >/dev/null \
   || fail "node 2's own job after its death: $(curl -s "$(url 1 "/jobs/$tex")" | head -c 400)"
 start_node 2
 echo "cluster: (j) a node killed rendering its own job: the job failed with node_lost"
@@ -231,8 +234,8 @@ echo "cluster: (j) a node killed rendering its own job: the job failed with node
 # (d) Redis down, then back from its AOF.
 kill -9 "$redis_pid"; wait "$redis_pid" 2>/dev/null || true; redis_pid=""
 headers=$(curl -s -D - -o /dev/null --data-binary @scenes/cho.txt "$(url 1 "/render?width=64&height=48")")
-echo "$headers" | head -1 | grep -q " 503" || fail "POST /render without Redis: $(echo "$headers" | head -1)"
-echo "$headers" | grep -qi '^Retry-After:' || fail "503 without Retry-After"
+[[ ${headers%%$'\n'*} == *" 503"* ]] || fail "POST /render without Redis: ${headers%%$'\n'*}"
+grep -qi '^Retry-After:' <<<"$headers" || fail "503 without Retry-After"
 code=$(curl -s -o /dev/null -w '%{http_code}' "$(url 2 /healthz)")
 [ "$code" = 503 ] || fail "/healthz without Redis gave $code"
 code=$(curl -s -o /dev/null -w '%{http_code}' "$(url 3 "/jobs/$id")")

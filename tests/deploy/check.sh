@@ -58,7 +58,8 @@ for base in "http://127.0.0.1:$plain" "https://localhost:$tls"; do
   cmp -s "$tmp/local.png" "$tmp/proxied.png" || fail "$base: the image differs from a local render"
   id=$(curl -skf --data-binary @"$scene" "$base/render?width=40&height=30&seed=7" \
        | python3 -c 'import json,sys; print(json.load(sys.stdin)["id"])')
-  curl -skfN --max-time 20 "$base/jobs/$id/events" | grep -q '^event: done' \
+  # grep reads to the end: with pipefail, grep -q leaving early can fail curl (a closed pipe).
+  curl -skfN --max-time 20 "$base/jobs/$id/events" | grep '^event: done' >/dev/null \
     || fail "$base: no 'done' event on the event stream"
 done
 code=$(curl -s -o /dev/null -w '%{http_code}' "http://127.0.0.1:$redirect/healthz")
