@@ -36,7 +36,7 @@ start_redis() {
   redis-server --port 0 --unixsocket "$sock" --unixsocketperm 700 --dir "$dir" \
     --appendonly yes --appendfsync everysec --save "" --daemonize no >>"$dir/redis.log" 2>&1 &
   redis_pid=$!
-  for _ in $(seq 100); do rcli ping 2>/dev/null | grep -q PONG && return 0; sleep 0.05; done
+  for _ in $(seq 100); do rcli ping 2>/dev/null | grep PONG >/dev/null && return 0; sleep 0.05; done
   fail "redis-server did not start"
 }
 
@@ -53,7 +53,7 @@ start_node() {
 url() { echo "http://127.0.0.1:${ports[$1]}$2"; }
 field() { python3 -c "import json,sys; d=json.load(sys.stdin); print(d$1)"; }
 # (grep, not python3, whose start alone takes 0.3 s on a busy machine: states are polled)
-state_on() { curl -s "$(url "$1" "/jobs/$2")" | grep -o '"state": *"[a-z]*"' | head -1 | cut -d'"' -f4; }
+state_on() { curl -s "$(url "$1" "/jobs/$2")" | grep -o '"state": *"[a-z]*"' | awk -F'"' 'NR == 1 { print $4 }'; }
 metric() { curl -s "$(url "$1" /metrics)" | awk -v m="$2" '$1 == m {print int($2)}'; }
 
 start_redis
@@ -123,13 +123,13 @@ before=$(date +%s%N)
 curl -s -o "$dir/del.json" -w '%{http_code} %{time_total}\n' -X DELETE "$(url 3 "/jobs/$long")" >"$dir/del.code"
 stopped=0
 while [ $(( ($(date +%s%N) - before) / 1000000 )) -lt 5000 ]; do
-  if [ "$(rcli xpending rf:work render | head -1)" = 0 ]; then stopped=1; break; fi
+  if [ "$(rcli xpending rf:work render | sed -n 1p)" = 0 ]; then stopped=1; break; fi
   sleep 0.01
 done
 took=$(( ($(date +%s%N) - before) / 1000000 ))
 read -r code del_s <"$dir/del.code"
 [ "$code" = 200 ] && [ "$(field '["state"]' <"$dir/del.json")" = canceled ] || fail "DELETE on node 3: $code $(cat "$dir/del.json")"
-[ "$stopped" = 1 ] && [ "$took" -lt "${CANCEL_MS:-500}" ] || fail "units still held ${CANCEL_MS:-500} ms after the cancel (the DELETE took $del_s s): $(rcli xpending rf:work render | head -1)"
+[ "$stopped" = 1 ] && [ "$took" -lt "${CANCEL_MS:-500}" ] || fail "units still held ${CANCEL_MS:-500} ms after the cancel (the DELETE took $del_s s): $(rcli xpending rf:work render | sed -n 1p)"
 sleep 0.3
 [ "$(metric 1 rayfarm_units_in_flight)" = 0 ] && [ "$(metric 2 rayfarm_units_in_flight)" = 0 ] \
   || fail "a node still renders the canceled job"
