@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "geometry/revsurf.h"
 
@@ -148,6 +149,76 @@ class Rays {
   std::mt19937_64 g_;
 };
 
+// A ray of kind `kind` at surface `surfer`, its height drawn already (the tall kind draws its
+// own unless `keep_height`): its frame ray and whether it leaves the surface.
+RevsurfRay make_ray(Rays& g, int surfer, int kind, double& height, bool& own,
+                    bool keep_height = false) {
+  const double rmax = rayfarm::revsurf_max_radius(surfer, height);
+  V o{0, 0, 0}, d{0, 0, 0};
+  own = false;
+  switch (kind) {
+    case anywhere:
+      o = {g.uni(-3, 3) * rmax, g.uni(-1, height + 1), g.uni(-3, 3) * rmax};
+      d = std::ldexp(1.0, g.below(7) - 3) * g.sphere();
+      break;
+    case aimed: {
+      const V target{g.uni(-1, 1) * rmax, g.uni(0, height), g.uni(-1, 1) * rmax};
+      o = target + g.uni(0.5, 100) * g.sphere();
+      d = std::ldexp(1.0, g.below(7) - 3) * (target - o);
+      break;
+    }
+    case leaving: {  // from a point of the surface, to either side
+      const double top = rayfarm::revsurf_top(surfer, height);
+      o = g.on_surface(surfer, g.uni(0, top), g.uni(0, 6.3), nullptr);
+      d = g.sphere();
+      own = g.below(4) != 0;
+      break;
+    }
+    case grazing: {  // along the tangent plane at a point, nudged by a tiny angle
+      const double top = rayfarm::revsurf_top(surfer, height);
+      V normal;
+      const V p = g.on_surface(surfer, g.uni(0, top), g.uni(0, 6.3), &normal);
+      const V t1 = unit(cross(normal, g.sphere())), t2 = cross(normal, t1);
+      const double a = g.uni(0, 6.3);
+      const V tangent = std::cos(a) * t1 + std::sin(a) * t2;
+      const double nudge = (g.below(2) ? 1 : -1) * std::ldexp(g.uni(0, 1), -g.below(50));
+      d = unit(tangent + nudge * normal);
+      o = p - g.uni(0.01, 20) * d;
+      if (g.below(3) == 0) {  // or leaving the surface tangentially
+        o = p;
+        own = true;
+      }
+      break;
+    }
+    case axial:  // dx = dz = 0, on the axis or beside it, inside the surface or out
+      o = {g.below(2) ? 0 : g.uni(-2, 2) * rmax, g.uni(-3, height + 3),
+           g.below(2) ? 0 : g.uni(-2, 2) * rmax};
+      d = {0, g.below(2) ? g.uni(0.01, 5) : -g.uni(0.01, 5), 0};
+      break;
+    case level:  // dy = 0, at, below and above the ends too
+      o = {g.uni(-5, 5) * rmax,
+           g.below(8) == 0 ? (g.below(2) ? 0.0 : height) : g.uni(-0.5, height + 0.5),
+           g.uni(-5, 5) * rmax};
+      d = g.sphere();
+      d.y = 0;
+      break;
+    case scaled: {  // far away or near, directions of any length
+      const V target{g.uni(-1.2, 1.2) * rmax, g.uni(0, height), g.uni(-1.2, 1.2) * rmax};
+      o = target + std::ldexp(g.uni(1, 2), g.below(48) - 8) * g.sphere();
+      d = std::ldexp(1.0, g.below(121) - 60) * unit(target - o);
+      break;
+    }
+    default: {  // tall surfaces (the cone still ends at its apex, y = 6), rays high up
+      if (!keep_height) height = g.uni(5, 60);
+      const V target{g.uni(-1.2, 1.2) * rmax, g.uni(0, height), g.uni(-1.2, 1.2) * rmax};
+      o = {g.uni(-4, 4) * rmax, g.uni(4, height + 4), g.uni(-4, 4) * rmax};
+      d = g.below(2) ? target - o : g.sphere();
+      break;
+    }
+  }
+  return frame_ray(o, d);
+}
+
 // Runs `n` rays of every kind against surface `surfer`, comparing `trust`'s search (1: the
 // real one) with the copy above.
 Tally compare(int surfer, long n, double trust, std::uint64_t seed) {
@@ -156,70 +227,8 @@ Tally compare(int surfer, long n, double trust, std::uint64_t seed) {
   for (long i = 0; i < n; ++i) {
     const int kind = static_cast<int>(i % kinds);
     double height = g.uni(0.5, 8);
-    const double rmax = rayfarm::revsurf_max_radius(surfer, height);
-    V o{0, 0, 0}, d{0, 0, 0};
     bool own = false;
-    switch (kind) {
-      case anywhere:
-        o = {g.uni(-3, 3) * rmax, g.uni(-1, height + 1), g.uni(-3, 3) * rmax};
-        d = std::ldexp(1.0, g.below(7) - 3) * g.sphere();
-        break;
-      case aimed: {
-        const V target{g.uni(-1, 1) * rmax, g.uni(0, height), g.uni(-1, 1) * rmax};
-        o = target + g.uni(0.5, 100) * g.sphere();
-        d = std::ldexp(1.0, g.below(7) - 3) * (target - o);
-        break;
-      }
-      case leaving: {  // from a point of the surface, to either side
-        const double top = rayfarm::revsurf_top(surfer, height);
-        o = g.on_surface(surfer, g.uni(0, top), g.uni(0, 6.3), nullptr);
-        d = g.sphere();
-        own = g.below(4) != 0;
-        break;
-      }
-      case grazing: {  // along the tangent plane at a point, nudged by a tiny angle
-        const double top = rayfarm::revsurf_top(surfer, height);
-        V normal;
-        const V p = g.on_surface(surfer, g.uni(0, top), g.uni(0, 6.3), &normal);
-        const V t1 = unit(cross(normal, g.sphere())), t2 = cross(normal, t1);
-        const double a = g.uni(0, 6.3);
-        const V tangent = std::cos(a) * t1 + std::sin(a) * t2;
-        const double nudge = (g.below(2) ? 1 : -1) * std::ldexp(g.uni(0, 1), -g.below(50));
-        d = unit(tangent + nudge * normal);
-        o = p - g.uni(0.01, 20) * d;
-        if (g.below(3) == 0) {  // or leaving the surface tangentially
-          o = p;
-          own = true;
-        }
-        break;
-      }
-      case axial:  // dx = dz = 0, on the axis or beside it, inside the surface or out
-        o = {g.below(2) ? 0 : g.uni(-2, 2) * rmax, g.uni(-3, height + 3),
-             g.below(2) ? 0 : g.uni(-2, 2) * rmax};
-        d = {0, g.below(2) ? g.uni(0.01, 5) : -g.uni(0.01, 5), 0};
-        break;
-      case level:  // dy = 0, at, below and above the ends too
-        o = {g.uni(-5, 5) * rmax,
-             g.below(8) == 0 ? (g.below(2) ? 0.0 : height) : g.uni(-0.5, height + 0.5),
-             g.uni(-5, 5) * rmax};
-        d = g.sphere();
-        d.y = 0;
-        break;
-      case scaled: {  // far away or near, directions of any length
-        const V target{g.uni(-1.2, 1.2) * rmax, g.uni(0, height), g.uni(-1.2, 1.2) * rmax};
-        o = target + std::ldexp(g.uni(1, 2), g.below(48) - 8) * g.sphere();
-        d = std::ldexp(1.0, g.below(121) - 60) * unit(target - o);
-        break;
-      }
-      default: {  // tall surfaces (the cone still ends at its apex, y = 6), rays high up
-        height = g.uni(5, 60);
-        const V target{g.uni(-1.2, 1.2) * rmax, g.uni(0, height), g.uni(-1.2, 1.2) * rmax};
-        o = {g.uni(-4, 4) * rmax, g.uni(4, height + 4), g.uni(-4, 4) * rmax};
-        d = g.below(2) ? target - o : g.sphere();
-        break;
-      }
-    }
-    const RevsurfRay ray = frame_ray(o, d);
+    const RevsurfRay ray = make_ray(g, surfer, kind, height, own);
     const double want = before::revsurf_first_crossing(surfer, height, ray, own);
     const double got = rayfarm::revsurf_detail::first_crossing(surfer, height, ray, own, trust);
     ++tally.rays[kind];
@@ -265,6 +274,45 @@ TEST_P(RevsurfExactness, TheSameDoubleAsBeforeOnEveryKindOfRay) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, RevsurfExactness, testing::Values(1, 2, 3));
+
+// Many rays at one surface at once (revsurf_first_crossings: the cone's in vector lanes where
+// the processor has AVX2, each lane stepping and bisecting its own ray): the same doubles as
+// the copy above, none leaving the surface (rays that start on it are taken as any other).
+// Batches of 1 to 300 rays cross the lanes' chunks of 128 and leave lanes empty.
+TEST_P(RevsurfExactness, ManyRaysAtOnceGiveTheSameDoubles) {
+  const int surfer = GetParam();
+  Rays g(0xba7c0000u + surfer);
+  long rays = 0, hits = 0, differing = 0;
+  std::string first;
+  std::vector<RevsurfRay> batch;
+  std::vector<double> got;
+  const long total = std::max(rays_per_surface() / 4, 10'000L);
+  for (int b = 0; rays < total; ++b) {
+    const bool tall = b % 4 == 0;
+    double height = tall ? g.uni(5, 60) : g.uni(0.5, 8);
+    batch.resize(1 + g.below(300));
+    for (RevsurfRay& ray : batch) {
+      bool own = false;
+      ray = make_ray(g, surfer, tall ? static_cast<int>(Kind::tall) : g.below(Kind::tall), height,
+                     own, true);
+    }
+    got.assign(batch.size(), 0);
+    rayfarm::revsurf_first_crossings(surfer, height, batch, got);
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      const double want = before::revsurf_first_crossing(surfer, height, batch[i], false);
+      ++rays;
+      hits += want > 0;
+      if (std::bit_cast<std::uint64_t>(want) != std::bit_cast<std::uint64_t>(got[i])) {
+        if (first.empty())
+          first = "batch " + std::to_string(b) + " ray " + std::to_string(i) + ": " +
+                  std::to_string(want) + " before, " + std::to_string(got[i]) + " now";
+        ++differing;
+      }
+    }
+  }
+  EXPECT_EQ(differing, 0) << first;
+  EXPECT_GT(hits, rays / 10);
+}
 
 // Rays leaving the surface: the certificate (certainly_no_crossing) answers most of those
 // that meet the surface nowhere else, and never one that does meet it again, whatever the

@@ -9,6 +9,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <span>
 
 namespace rayfarm {
 
@@ -288,6 +289,46 @@ struct NoLimit {
   static bool before(double, double) { return false; }
 };
 
+// Where first_crossing searches: the part of the ray inside the surface's cylinder and its
+// height, with the stepping's Lipschitz bound and least step there; false when that part is
+// empty (the answer is -1).
+struct SearchSpan {
+  double lo, hi, lipschitz, min_step;
+};
+
+[[gnu::always_inline]] inline bool search_span(int surfer, double height, const RevsurfRay& r,
+                                               SearchSpan& span) {
+  height = revsurf_top(surfer, height);
+  double lo = 0, hi = 1e300;
+  if (r.dy != 0) {
+    double t1 = -r.y0 / r.dy, t2 = (height - r.y0) / r.dy;
+    if (t1 > t2) std::swap(t1, t2);
+    lo = std::max(lo, t1);
+    hi = std::min(hi, t2);
+  } else if (r.y0 < 0 || r.y0 > height) {
+    return false;
+  }
+  const double rmax = revsurf_max_radius(surfer, height);
+  if (r.rdd > 0) {
+    const double disc = r.r0d * r.r0d - r.rdd * (r.rr - rmax * rmax);
+    if (disc < 0) return false;
+    const double s = std::sqrt(disc);
+    lo = std::max(lo, (-r.r0d - s) / r.rdd);
+    hi = std::min(hi, (-r.r0d + s) / r.rdd);
+  } else if (r.rr > rmax * rmax) {
+    return false;
+  }
+  if (!(lo < hi) || !std::isfinite(hi)) return false;
+  // |f'| <= 2|r0d + t rdd| + 2 r |r'| |dy|, the first term largest at an end of [lo, hi].
+  const double slope_bound = surfer == 1 ? 2 * rmax * 2.0 / 3 : 2 * 1.5 * 0.5;
+  span.lipschitz = 2 * std::max(std::abs(r.r0d + lo * r.rdd), std::abs(r.r0d + hi * r.rdd)) +
+                   slope_bound * std::abs(r.dy);
+  span.min_step = (hi - lo) / 512;
+  span.lo = lo;
+  span.hi = hi;
+  return true;
+}
+
 // revsurf_first_crossing below, with the certificates' `trust` (RoundingBound); `shown`
 // (tests) learns whether certainly_no_crossing gave the answer. A shadow ray asks only
 // whether the crossing comes before its light: with a `limit`, once the stepping has a
@@ -297,37 +338,13 @@ struct NoLimit {
 template <class Limit = NoLimit>
 inline double first_crossing(int surfer, double height, const RevsurfRay& r, bool own, double trust,
                              bool* shown = nullptr, const Limit& limit = {}) {
-  height = revsurf_top(surfer, height);
-  double lo = 0, hi = 1e300;
-  if (r.dy != 0) {
-    double t1 = -r.y0 / r.dy, t2 = (height - r.y0) / r.dy;
-    if (t1 > t2) std::swap(t1, t2);
-    lo = std::max(lo, t1);
-    hi = std::min(hi, t2);
-  } else if (r.y0 < 0 || r.y0 > height) {
-    return -1;
-  }
-  const double rmax = revsurf_max_radius(surfer, height);
-  if (r.rdd > 0) {
-    const double disc = r.r0d * r.r0d - r.rdd * (r.rr - rmax * rmax);
-    if (disc < 0) return -1;
-    const double s = std::sqrt(disc);
-    lo = std::max(lo, (-r.r0d - s) / r.rdd);
-    hi = std::min(hi, (-r.r0d + s) / r.rdd);
-  } else if (r.rr > rmax * rmax) {
-    return -1;
-  }
-  if (!(lo < hi) || !std::isfinite(hi)) return -1;
+  SearchSpan span;
+  if (!search_span(surfer, height, r, span)) return -1;
+  const double lo = span.lo, hi = span.hi, lipschitz = span.lipschitz, min_step = span.min_step;
   auto f = [&](double t) {
     const double rad = revsurf_radius(surfer, r.y0 + t * r.dy);
     return r.rr + t * (2 * r.r0d + t * r.rdd) - rad * rad;
   };
-  // |f'| <= 2|r0d + t rdd| + 2 r |r'| |dy|, the first term largest at an end of [lo, hi].
-  const double slope_bound = surfer == 1 ? 2 * rmax * 2.0 / 3 : 2 * 1.5 * 0.5;
-  const double lipschitz =
-      2 * std::max(std::abs(r.r0d + lo * r.rdd), std::abs(r.r0d + hi * r.rdd)) +
-      slope_bound * std::abs(r.dy);
-  const double min_step = (hi - lo) / 512;
   double t = lo, v = f(t);
   const RoundingBound bound{r, surfer == 1, trust};
   if (own) {  // off the surface it starts on: the side the ray is on decides
@@ -355,6 +372,11 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
   return -1;
 }
 
+// The cone's crossings of n rays side by side in vector lanes (geometry/revsurf.cpp), the
+// same doubles as first_crossing's with own = false and no limit. Only where lanes_available().
+void cone_crossings_in_lanes(double height, const RevsurfRay* rays, int n, double* out);
+bool lanes_available();
+
 }  // namespace revsurf_detail
 
 // The first t > 0 at which the ray crosses the surface within 0 <= y <= height, or -1.
@@ -366,5 +388,12 @@ inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay
                                      const Limit& limit = {}) {
   return revsurf_detail::first_crossing(surfer, height, r, own, 1.0, nullptr, limit);
 }
+
+// revsurf_first_crossing(surfer, height, rays[i], false) into out[i] for each i: the same
+// doubles. Rays that do not start on the surface, many of them (a screen bin's): the cone's
+// are searched side by side in vector lanes where the processor has them, each lane with
+// its own ray's steps and bisection, so the latency of one ray's chain serves four.
+void revsurf_first_crossings(int surfer, double height, std::span<const RevsurfRay> rays,
+                             std::span<double> out);
 
 }  // namespace rayfarm

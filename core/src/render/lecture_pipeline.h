@@ -114,16 +114,25 @@ class LecturePipeline {
     const int shape_base = s_.shape_base();
     const std::span<const ScreenBinEntry> shapes =
         s_.shape_bins.empty() ? std::span<const ScreenBinEntry>() : s_.shape_bins.of_tile(tile);
+    RevsurfBatch<T, PrimaryRay*> batch;
     auto test_shapes = [&](bool searched) {
       for (const ScreenBinEntry& e : shapes) {
         const PreparedShape<T>& shape = s_.shapes[e.sphere];
         if (is_searched(shape) != searched) continue;
         const int index = shape_base + e.sphere;
-        const double near = searched ? e.near : -1.0;
+        auto take = [&](PrimaryRay* ray, T t) {
+          if (t > 0 && t <= t_max && ray->hit.beaten_by(t, index)) ray->hit = {t, index};
+        };
+        if (searched) {  // all of the rectangle's rays searched at once
+          for_rectangle(e, b, rays.data(), [&](PrimaryRay& ray) {
+            if (ray.dir && !(e.near > static_cast<double>(ray.hit.t)))
+              batch.add(shape, s_.eye, *ray.dir, &ray);
+          });
+          batch.run(shape, take);
+          continue;
+        }
         for_rectangle(e, b, rays.data(), [&](PrimaryRay& ray) {
-          if (!ray.dir || near > static_cast<double>(ray.hit.t)) return;
-          const T t = shape_t(shape, s_.eye, *ray.dir, index, Origin{});
-          if (t > 0 && t <= t_max && ray.hit.beaten_by(t, index)) ray.hit = {t, index};
+          if (ray.dir) take(&ray, shape_t(shape, s_.eye, *ray.dir, index, Origin{}));
         });
       }
     };
@@ -177,6 +186,7 @@ class LecturePipeline {
       used |= 1u << std::min(j, 31);
     }
     if (bounces.empty()) return;
+    RevsurfBatch<T, BounceRay*> batch;
     const TileGrid grid(s_.width, s_.height);
     const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
     for (int j = 0; j < planes; ++j) {
@@ -190,6 +200,9 @@ class LecturePipeline {
           const PreparedShape<T>& shape = s_.shapes[e.sphere];
           if (is_searched(shape) != searched) continue;
           const int index = s_.shape_base() + e.sphere;
+          auto take = [&](BounceRay* br, T t) {
+            if (t > 0 && t <= br->ray.t_max && br->hit.beaten_by(t, index)) br->hit = {t, index};
+          };
           for_rectangle(e, b, rays.data(), [&](const PrimaryRay& ray) {
             if (ray.bounce < 0) return;
             BounceRay& br = bounces[ray.bounce];
@@ -197,9 +210,14 @@ class LecturePipeline {
                 (searched && mirror_near(e.near, static_cast<double>(br.t_primary),
                                          s_.mirror_slack) > static_cast<double>(br.hit.t)))
               return;
-            const T t = shape_t(shape, br.ray.origin, br.ray.dir, index, br.ray.from);
-            if (t > 0 && t <= br.ray.t_max && br.hit.beaten_by(t, index)) br.hit = {t, index};
+            // A searched shape's rays are searched at once, unless one leaves it (which a
+            // ray off a plane does not).
+            if (searched && index != br.ray.from.object)
+              batch.add(shape, br.ray.origin, br.ray.dir, &br);
+            else
+              take(&br, shape_t(shape, br.ray.origin, br.ray.dir, index, br.ray.from));
           });
+          if (searched) batch.run(shape, take);
         }
       };
       test_shapes(false);

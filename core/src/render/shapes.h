@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <vector>
 
 #include "geometry/revsurf.h"
 #include "rayfarm/image.h"
@@ -75,19 +76,16 @@ struct ShadowLimit {
   }
 };
 
-// First t > 0 where the ray meets the surface of revolution (geometry/revsurf.h). Leaving
-// the surface itself (`own`), the crossing it starts on is not one: only a later crossing to
-// the other side counts, so no offset is needed at any scale. With a ShadowLimit, a value
-// that its test answers as it would the crossing.
-template <class T, class Limit = revsurf_detail::NoLimit>
-T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool own,
-            const Limit& limit = {}) {
+// The ray in surface s's frame (geometry/revsurf.h), or false when it certainly passes wide
+// of the surface or the surface lies behind it. Most rays do: said in world space, before
+// the change of frame and the search. The sphere is widened by 2^-20 of the distances
+// involved, far more than the rounding of this test and of the search together, so it never
+// drops a crossing the search would find; lengths far from 1 skip it.
+template <class T>
+[[gnu::always_inline]] inline bool revsurf_frame_ray(const PreparedShape<T>& s, const Vec3<T>& o,
+                                                     const Vec3<T>& d, RevsurfRay& ray) {
   const glm::dvec3 dd(d);
   {
-    // Most rays pass wide of the surface, or it lies behind them: said in world space, before
-    // the change of frame and the search. The sphere is widened by 2^-20 of the distances
-    // involved, far more than the rounding of this test and of the search together, so it
-    // never drops a crossing the search would find; lengths far from 1 skip it.
     const glm::dvec3 oc = s.bound_centre - glm::dvec3(o);
     const double occ = glm::dot(oc, oc), ddd = glm::dot(dd, dd);
     if (occ < 1e100 && ddd > 1e-100 && ddd < 1e100) {
@@ -95,16 +93,58 @@ T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool 
       const glm::dvec3 x = glm::cross(oc, dd);
       const double along = glm::dot(oc, dd);
       if (glm::dot(x, x) > rm * rm * ddd || (along < 0 && along * along > rm * rm * ddd))
-        return T(-1);
+        return false;
     }
   }
   const glm::dvec3 a(s.normal), q = glm::dvec3(o) - glm::dvec3(s.point);
   const double y0 = glm::dot(q, a), dy = glm::dot(dd, a);
   const glm::dvec3 r0 = q - y0 * a, rd = dd - dy * a;
-  const RevsurfRay ray{y0, dy, glm::dot(r0, r0), glm::dot(r0, rd), glm::dot(rd, rd)};
+  ray = {y0, dy, glm::dot(r0, r0), glm::dot(r0, rd), glm::dot(rd, rd)};
+  return true;
+}
+
+// First t > 0 where the ray meets the surface of revolution (geometry/revsurf.h). Leaving
+// the surface itself (`own`), the crossing it starts on is not one: only a later crossing to
+// the other side counts, so no offset is needed at any scale. With a ShadowLimit, a value
+// that its test answers as it would the crossing.
+template <class T, class Limit = revsurf_detail::NoLimit>
+T revsurf_t(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, bool own,
+            const Limit& limit = {}) {
+  RevsurfRay ray;
+  if (!revsurf_frame_ray(s, o, d, ray)) return T(-1);
   const double t = revsurf_first_crossing(s.surfer, static_cast<double>(s.height), ray, own, limit);
   return t > 0 ? static_cast<T>(t) : T(-1);
 }
+
+// revsurf_t of many rays at one surface, none leaving it, without a limit: the same answers,
+// the search done for all of them at once (revsurf_first_crossings). add() each ray with
+// the key to give back with its answer, then run().
+template <class T, class Key>
+class RevsurfBatch {
+ public:
+  void add(const PreparedShape<T>& s, const Vec3<T>& o, const Vec3<T>& d, Key key) {
+    RevsurfRay ray;
+    if (!revsurf_frame_ray(s, o, d, ray)) return;  // no crossing: -1, which changes nothing
+    rays_.push_back(ray);
+    keys_.push_back(key);
+  }
+  // Calls f(key, t) for each ray added, t as revsurf_t gives it, and empties the batch.
+  template <class F>
+  void run(const PreparedShape<T>& s, F&& f) {
+    if (rays_.empty()) return;
+    out_.resize(rays_.size());
+    revsurf_first_crossings(s.surfer, static_cast<double>(s.height), rays_, out_);
+    for (std::size_t i = 0; i < rays_.size(); ++i)
+      f(keys_[i], out_[i] > 0 ? static_cast<T>(out_[i]) : T(-1));
+    rays_.clear();
+    keys_.clear();
+  }
+
+ private:
+  std::vector<RevsurfRay> rays_;
+  std::vector<Key> keys_;
+  std::vector<double> out_;
+};
 
 // Distance to the plane through `point` with unit normal n, ahead of a ray from o, or -1.
 // A secondary ray that starts in the plane (within rounding) cannot meet it: it is the ray's
