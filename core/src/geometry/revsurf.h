@@ -289,6 +289,13 @@ struct NoLimit {
   static bool before(double, double) { return false; }
 };
 
+// The function whose change of sign first_crossing finds: |radial(t)|² − r(y(t))², as
+// computed (its rounding is RoundingBound's subject).
+[[gnu::always_inline]] inline double crossing_f(int surfer, const RevsurfRay& r, double t) {
+  const double rad = revsurf_radius(surfer, r.y0 + t * r.dy);
+  return r.rr + t * (2 * r.r0d + t * r.rdd) - rad * rad;
+}
+
 // Where first_crossing searches: the part of the ray inside the surface's cylinder and its
 // height, with the stepping's Lipschitz bound and least step there; false when that part is
 // empty (the answer is -1).
@@ -341,10 +348,7 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
   SearchSpan span;
   if (!search_span(surfer, height, r, span)) return -1;
   const double lo = span.lo, hi = span.hi, lipschitz = span.lipschitz, min_step = span.min_step;
-  auto f = [&](double t) {
-    const double rad = revsurf_radius(surfer, r.y0 + t * r.dy);
-    return r.rr + t * (2 * r.r0d + t * r.rdd) - rad * rad;
-  };
+  auto f = [&](double t) { return crossing_f(surfer, r, t); };
   double t = lo, v = f(t);
   const RoundingBound bound{r, surfer == 1, trust};
   if (own) {  // off the surface it starts on: the side the ray is on decides
@@ -372,9 +376,11 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
   return -1;
 }
 
-// The cone's crossings of n rays side by side in vector lanes (geometry/revsurf.cpp), the
-// same doubles as first_crossing's with own = false and no limit. Only where lanes_available().
-void cone_crossings_in_lanes(double height, const RevsurfRay* rays, int n, double* out);
+// The crossings of n rays side by side in vector lanes (geometry/revsurf.cpp), the same
+// doubles as first_crossing's with own = false and no limit, but NaN where a bracket's
+// bisection ended at b <= 0 (first_crossing then steps on: the caller asks it). Only where
+// lanes_available().
+void crossings_in_lanes(int surfer, double height, const RevsurfRay* rays, int n, double* out);
 bool lanes_available();
 
 }  // namespace revsurf_detail
