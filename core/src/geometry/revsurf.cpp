@@ -13,11 +13,11 @@
 // lane as bisect_wave takes for its bracket, with f evaluated only in the lanes that need it.
 // A bracket whose bisection ends at b <= 0 (first_crossing then steps on) is left to
 // first_crossing.
+#include "geometry/revsurf.h"
+
 #include <cmath>
 #include <cstdint>
 #include <limits>
-
-#include "geometry/revsurf.h"
 
 namespace rayfarm {
 
@@ -39,7 +39,8 @@ RAYFARM_LANES int mask_bits(M4 m) {
 RAYFARM_LANES bool any(M4 m) { return mask_bits(m) != 0; }
 RAYFARM_LANES D4 abs4(D4 x) {
   constexpr std::int64_t magnitude = 0x7fffffffffffffff;
-  return reinterpret_cast<D4>(reinterpret_cast<M4>(x) & M4{magnitude, magnitude, magnitude, magnitude});
+  return reinterpret_cast<D4>(reinterpret_cast<M4>(x) &
+                              M4{magnitude, magnitude, magnitude, magnitude});
 }
 // !(x <= a || x >= b), NaN included, as first_crossing's loops test it.
 RAYFARM_LANES M4 strictly_inside(D4 x, D4 a, D4 b) { return ~((x <= a) | (x >= b)); }

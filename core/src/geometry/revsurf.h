@@ -396,9 +396,9 @@ inline double revsurf_first_crossing(int surfer, double height, const RevsurfRay
 }
 
 // revsurf_first_crossing(surfer, height, rays[i], false) into out[i] for each i: the same
-// doubles. Rays that do not start on the surface, many of them (a screen bin's): the cone's
-// are searched side by side in vector lanes where the processor has them, each lane with
-// its own ray's steps and bisection, so the latency of one ray's chain serves four.
+// doubles. Rays that do not start on the surface, many of them (a screen bin's): they are
+// searched side by side in vector lanes where the processor has AVX2, each lane with its
+// own ray's steps and bisection, so the latency of one ray's chain serves four.
 void revsurf_first_crossings(int surfer, double height, std::span<const RevsurfRay> rays,
                              std::span<double> out);
 
