@@ -190,7 +190,10 @@ inline bool certainly_no_crossing(const F& f, const RoundingBound& bound, double
 // bracket uncertain (the rounding noise about the root, where the rest of the midpoints
 // fall), the plain bisection takes over for the steps left. Anything not finite (overflow,
 // NaN) leaves the regions empty, so f is evaluated, as before. `trust` < 1 shrinks the
-// margin: for tests only, to show that a wrong certificate changes answers.
+// margin: for tests only, to show that a wrong certificate changes answers. revsurf.cpp's
+// lanes (WaveBisection, and the stepping and the cone's bisection) repeat these searches
+// operation for operation: a change here is a change there, which the exactness tests'
+// batched rays check.
 template <class F>
 inline double bisect_wave(const F& f, const RoundingBound& bound, double a, double b, double fa,
                           double fb) {
