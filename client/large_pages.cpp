@@ -9,14 +9,16 @@
 // the preparation's arrays of a few hundred KB cost grid-8000 and random-100k 8-15% of
 // their runs in 4 KB faults, and in the heap they share huge pages instead of holding a
 // 2 MB mapping each (as from 256 KB before): 8 MB less memory for kinds-mix (20.3 -> 12.3
-// MB) and grid-8000 (14.3 -> 6.3), 4 more for shallow-60k, whose freed text no longer holds
-// them. That is what counts once the machine has been idle a few seconds, when memory new to
-// the process costs 0.9-1.7 ms per MB (0.07 when it was freed just before). Freed, a
-// mapping is kept for the next large blocks (below).
+// MB) and grid-8000 (14.3 -> 6.3). That is what counts once the machine has been idle a few
+// seconds, when memory new to the process costs 0.9-1.7 ms per MB (0.07 when it was freed
+// just before). Freed, a mapping is kept for the next large blocks, and for blocks from
+// 256 KB where its pages are in memory already (below): 4-8 MB less for shallow-60k,
+// mirror-room-20k, lights-inside-50k and camera-inside-50k.
 #include <malloc.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -28,21 +30,28 @@ namespace {
 
 constexpr std::size_t kHuge = std::size_t{1} << 21;
 constexpr std::size_t kMinBlock = std::size_t{1} << 21;
-// The block starts this far into its mapping, where the mapping's length is kept; it also
-// keeps every alignment up to 64 (the hierarchy's nodes ask for 64).
+// Blocks from kMedium up to kMinBlock are cut from a spare when there is one (below), in
+// whole kUnits; otherwise they come from malloc. A block of either kind starts kHeader
+// bytes into its piece, whose length is kept there; that also keeps every alignment up to
+// 64 (the hierarchy's nodes ask for 64).
+constexpr std::size_t kMedium = std::size_t{1} << 18;
+constexpr std::size_t kUnit = std::size_t{1} << 16;
 constexpr std::size_t kHeader = 64;
 
 // The live blocks, so that delete can tell them from malloc's without reading memory that
-// is not its own. A pointer 64 bytes past a 2 MB boundary is looked up here; malloc's blocks
-// land there once in 100,000.
+// is not its own. A pointer 64 bytes past a 64 KB boundary is looked up here; malloc's
+// blocks land there once in 4,096.
 std::atomic<void*> live[1024];
 
-// Freed mappings kept for the next large blocks. Their pages are faulted in already: on the
-// virtual machines measured, a fresh page costs about 1 ms per MB to fault in and clear, more
-// than building the hierarchy over what it holds. Loading a large scene frees arrays (the
-// two halves of the file's objects, the hierarchy's build arrays, the light buffers' sorting)
-// that the next steps can fill instead. A spare larger than asked for is cut at a 2 MB
-// boundary and the rest kept. Kept while the program runs: a command's whole life.
+// Freed mappings kept for the next large and medium blocks. Their pages are faulted in
+// already: on the virtual machines measured, a fresh page costs about 1 ms per MB to fault in
+// and clear, more than building the hierarchy over what it holds. Loading a large scene frees
+// arrays (the text, the two halves of the file's objects and their name tables) that the
+// next steps can fill instead: the hierarchy's arrays, and the bins' and light buffers'
+// arrays of a few hundred KB, which from malloc would grow its heap by fresh pages while
+// these lie unused (shallow-60k: 9 MB more). A spare larger than asked for is cut and the
+// rest kept; a freed piece joins the spares beside it. Kept while the program runs: a
+// command's whole life.
 struct Spare {
   std::uintptr_t base;
   std::size_t length;
@@ -54,12 +63,27 @@ Spare spares[kMaxSpares];
 int spare_count = 0;
 std::size_t spare_bytes = 0;
 
-// The start of `length` bytes cut from the smallest spare that holds them; 0 if none does.
-std::uintptr_t take_spare(std::size_t length) {
+// Whether every page of [base, base + length) has been touched (and is still there).
+bool resident(std::uintptr_t base, std::size_t length) {
+  constexpr std::size_t kPage = 4096;
+  unsigned char pages[kMinBlock / kPage];
+  for (std::size_t done = 0; done < length; done += kMinBlock) {
+    const std::size_t n = std::min(kMinBlock, length - done);
+    if (mincore(reinterpret_cast<void*>(base + done), n, pages) != 0) return false;
+    for (std::size_t i = 0; i < (n + kPage - 1) / kPage; ++i)
+      if (!(pages[i] & 1)) return false;
+  }
+  return true;
+}
+
+// The start of `length` bytes cut from the smallest spare that holds them (`warm`: whose
+// first `length` bytes are in memory already); 0 if none does.
+std::uintptr_t take_spare(std::size_t length, bool warm = false) {
   std::lock_guard lock(spare_mutex);
   int best = -1;
   for (int i = 0; i < spare_count; ++i)
-    if (spares[i].length >= length && (best < 0 || spares[i].length < spares[best].length))
+    if (spares[i].length >= length && (best < 0 || spares[i].length < spares[best].length) &&
+        (!warm || resident(spares[i].base, length)))
       best = i;
   if (best < 0) return 0;
   const std::uintptr_t base = spares[best].base;
@@ -73,12 +97,25 @@ std::uintptr_t take_spare(std::size_t length) {
   return base;
 }
 
-// Keeps a freed mapping for reuse; false when there is no room (the caller unmaps it).
+// Keeps a freed piece for reuse, joined to the spares it touches; false when there is no
+// room (the caller unmaps it).
 bool keep_spare(std::uintptr_t base, std::size_t length) {
   std::lock_guard lock(spare_mutex);
-  if (spare_count == kMaxSpares || spare_bytes + length > kMaxSpareBytes) return false;
-  spares[spare_count++] = {base, length};
-  spare_bytes += length;
+  if (spare_bytes + length > kMaxSpareBytes) return false;
+  std::uintptr_t end = base + length;
+  for (int i = 0; i < spare_count;) {
+    if (spares[i].base + spares[i].length == base || spares[i].base == end) {
+      base = std::min(base, spares[i].base);
+      end = std::max(end, spares[i].base + spares[i].length);
+      spare_bytes -= spares[i].length;
+      spares[i] = spares[--spare_count];
+    } else {
+      ++i;
+    }
+  }
+  if (spare_count == kMaxSpares) return false;
+  spares[spare_count++] = {base, end - base};
+  spare_bytes += end - base;
   return true;
 }
 
@@ -101,11 +138,14 @@ void release_mapping(std::uintptr_t base, std::size_t length) {
   if (!keep_spare(base, length)) munmap(reinterpret_cast<void*>(base), length);
 }
 
-void* map_large(std::size_t size) {
+// A block of `size` bytes in a piece of its own: cut from a spare, or for a large block (not
+// `medium`) from a fresh mapping when none holds it. Null when neither can be had.
+void* map_large(std::size_t size, bool medium) {
   if (size > (std::size_t{1} << 46)) return nullptr;
-  const std::size_t length = (size + kHeader + kHuge - 1) & ~(kHuge - 1);
-  std::uintptr_t base = take_spare(length);
-  if (!base) base = map_fresh(length);
+  const std::size_t grain = medium ? kUnit : kHuge;
+  const std::size_t length = (size + kHeader + grain - 1) & ~(grain - 1);
+  std::uintptr_t base = take_spare(length, medium);
+  if (!base && !medium) base = map_fresh(length);
   if (!base) return nullptr;
   *reinterpret_cast<std::size_t*>(base) = length;
   void* p = reinterpret_cast<void*>(base + kHeader);
@@ -118,7 +158,7 @@ void* map_large(std::size_t size) {
 }
 
 bool unmap_large(void* p) {
-  if ((reinterpret_cast<std::uintptr_t>(p) & (kHuge - 1)) != kHeader) return false;
+  if ((reinterpret_cast<std::uintptr_t>(p) & (kUnit - 1)) != kHeader) return false;
   for (auto& slot : live) {
     void* mine = p;
     if (slot.load(std::memory_order_relaxed) == p &&
@@ -132,8 +172,8 @@ bool unmap_large(void* p) {
 }
 
 void* allocate(std::size_t size, std::size_t align) {
-  if (size >= kMinBlock && align <= kHeader)
-    if (void* p = map_large(size)) return p;
+  if (size >= kMedium && align <= kHeader)
+    if (void* p = map_large(size, size < kMinBlock)) return p;
   void* p = align <= alignof(std::max_align_t)
                 ? std::malloc(size ? size : 1)
                 : std::aligned_alloc(align, (size + align - 1) / align * align);

@@ -1,6 +1,7 @@
 // The client's operator new (client/large_pages.cpp), linked into this test alone: blocks of
-// 2 MB and more come from 2 MB-aligned mappings, every size and alignment is usable and
-// freed, from several threads at once, and the containers the renderer uses work on it.
+// 2 MB and more come from 2 MB-aligned mappings, those from 256 KB from freed ones whose
+// pages are in memory, every size and alignment is usable and freed, from several threads at
+// once, and the containers the renderer uses work on it.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -24,6 +25,7 @@ constexpr std::size_t kMiB = std::size_t{1} << 20;
 std::uintptr_t address(const void* p) { return reinterpret_cast<std::uintptr_t>(p); }
 
 TEST(LargePages, LargeBlocksStart64BytesIntoA2MiBAlignedMapping) {
+  rayfarm::large_pages::drop_spares();  // with no spare to cut them from
   for (std::size_t size : {2 * kMiB, 2 * kMiB + 1, 7 * kMiB + 3, 64 * kMiB}) {
     char* p = static_cast<char*>(::operator new(size));
     EXPECT_EQ(address(p) % (2 * kMiB), 64u) << size;
@@ -58,21 +60,68 @@ TEST(LargePages, FreedMappingsAreCutForTheNextLargeBlocks) {
   rayfarm::large_pages::drop_spares();
 }
 
-TEST(LargePages, BlocksBelow2MiBComeFromMalloc) {
-  // Rounded up to 2 MB, many small blocks would each hold a huge page. A malloc block may
-  // land 64 bytes past a 2 MB boundary now and then, never three in a row.
-  rayfarm::large_pages::drop_spares();  // with no spare to take
-  for (std::size_t size : {std::size_t{64}, std::size_t{12288}, kMiB / 4, 2 * kMiB - 1}) {
+TEST(LargePages, BlocksBelow256KiBComeFromMalloc) {
+  // A malloc block may land 64 bytes past a 64 KB boundary now and then, never three in a
+  // row; every block here would, from a spare, and there is one to take.
+  rayfarm::large_pages::drop_spares();
+  char* spare = static_cast<char*>(::operator new(8 * kMiB));
+  std::memset(spare, 1, 8 * kMiB);
+  ::operator delete(spare);
+  for (std::size_t size : {std::size_t{64}, std::size_t{12288}, kMiB / 4 - 1}) {
     void* blocks[3];
-    int mapped = 0;
+    int cut = 0;
     for (void*& b : blocks) {
       b = ::operator new(size);
       static_cast<char*>(b)[size - 1] = 1;
-      mapped += address(b) % (2 * kMiB) == 64;
+      cut += address(b) % (64 * 1024) == 64;
     }
-    EXPECT_LT(mapped, 3) << size;
+    EXPECT_LT(cut, 3) << size;
     for (void* b : blocks) ::operator delete(b);
   }
+  rayfarm::large_pages::drop_spares();
+}
+
+// Blocks from 256 KB to 2 MB are cut from a spare whose pages are in memory: one that a
+// freed block touched. With none, they come from malloc, never from a mapping of their own.
+TEST(LargePages, MediumBlocksAreCutFromTouchedSparesElseFromMalloc) {
+  rayfarm::large_pages::drop_spares();
+  for (std::size_t size : {kMiB / 4, kMiB, 2 * kMiB - 65}) {
+    void* blocks[3];
+    int cut = 0;
+    for (void*& b : blocks) {
+      b = ::operator new(size);
+      static_cast<char*>(b)[size - 1] = 1;
+      cut += address(b) % (64 * 1024) == 64;
+    }
+    EXPECT_LT(cut, 3) << size << ": no spare, so malloc's";
+    for (void* b : blocks) ::operator delete(b);
+  }
+  // A spare of 8 MB whose first 2 MB were touched (a huge page, or 4 KB pages all touched).
+  char* big = static_cast<char*>(::operator new(8 * kMiB - 64));
+  std::memset(big, 1, 2 * kMiB - 64);
+  const std::uintptr_t base = address(big) - 64;
+  ::operator delete(big);
+  // 1.5 MB fits in the touched part: cut there, in whole 64 KB units.
+  char* a = static_cast<char*>(::operator new(3 * kMiB / 2));
+  EXPECT_EQ(address(a) - 64, base);
+  std::memset(a, 2, 3 * kMiB / 2);
+  // The next 1 MB would reach past it (from 1.5625 MB): malloc's.
+  char* b = static_cast<char*>(::operator new(kMiB));
+  EXPECT_FALSE(address(b) >= base && address(b) < base + 8 * kMiB);
+  std::memset(b, 3, kMiB);
+  // 256 KB still fits in the touched part, after a's piece.
+  char* c = static_cast<char*>(::operator new(kMiB / 4));
+  EXPECT_EQ(address(c) - 64, base + 3 * kMiB / 2 + 64 * 1024);
+  std::memset(c, 4, kMiB / 4);
+  EXPECT_EQ(a[3 * kMiB / 2 - 1], 2);
+  ::operator delete(a);
+  ::operator delete(b);
+  ::operator delete(c);
+  // Freed, the pieces join the rest again: the whole 8 MB can be had in one block.
+  char* whole = static_cast<char*>(::operator new(8 * kMiB - 64));
+  EXPECT_EQ(address(whole) - 64, base);
+  ::operator delete(whole);
+  rayfarm::large_pages::drop_spares();
 }
 
 // The small blocks' heap is marked for huge pages from the start (VmFlags "hg" in smaps).
