@@ -31,17 +31,19 @@ namespace {
 constexpr std::size_t kHuge = std::size_t{1} << 21;
 constexpr std::size_t kMinBlock = std::size_t{1} << 21;
 // Blocks from kMedium up to kMinBlock are cut from a spare when there is one (below), in
-// whole kUnits; otherwise they come from malloc. A block of either kind starts kHeader
-// bytes into its piece, whose length is kept there; that also keeps every alignment up to
-// 64 (the hierarchy's nodes ask for 64).
+// whole kUnits; otherwise they come from malloc. A block of either kind starts its piece,
+// so a block of exactly 2 MB (a hash table's slots) holds one huge page, not two.
 constexpr std::size_t kMedium = std::size_t{1} << 18;
 constexpr std::size_t kUnit = std::size_t{1} << 16;
-constexpr std::size_t kHeader = 64;
 
-// The live blocks, so that delete can tell them from malloc's without reading memory that
-// is not its own. A pointer 64 bytes past a 64 KB boundary is looked up here; malloc's
-// blocks land there once in 4,096.
-std::atomic<void*> live[1024];
+// The live blocks and their pieces' lengths, so that delete can tell them from malloc's
+// without reading memory that is not its own. A pointer on a 64 KB boundary is looked up
+// here; malloc's blocks land there once in 4,096.
+struct Live {
+  std::atomic<void*> block{nullptr};
+  std::atomic<std::size_t> length{0};
+};
+Live live[1024];
 
 // Freed mappings kept for the next large and medium blocks. Their pages are faulted in
 // already: on the virtual machines measured, a fresh page costs about 1 ms per MB to fault in
@@ -143,28 +145,31 @@ void release_mapping(std::uintptr_t base, std::size_t length) {
 void* map_large(std::size_t size, bool medium) {
   if (size > (std::size_t{1} << 46)) return nullptr;
   const std::size_t grain = medium ? kUnit : kHuge;
-  const std::size_t length = (size + kHeader + grain - 1) & ~(grain - 1);
+  const std::size_t length = (size + grain - 1) & ~(grain - 1);
   std::uintptr_t base = take_spare(length, medium);
   if (!base && !medium) base = map_fresh(length);
   if (!base) return nullptr;
-  *reinterpret_cast<std::size_t*>(base) = length;
-  void* p = reinterpret_cast<void*>(base + kHeader);
+  void* p = reinterpret_cast<void*>(base);
   for (auto& slot : live) {
     void* empty = nullptr;
-    if (slot.compare_exchange_strong(empty, p, std::memory_order_acq_rel)) return p;
+    if (slot.block.compare_exchange_strong(empty, p, std::memory_order_acq_rel)) {
+      slot.length.store(length, std::memory_order_relaxed);  // read only by p's delete
+      return p;
+    }
   }
   release_mapping(base, length);  // too many at once: malloc's turn
   return nullptr;
 }
 
 bool unmap_large(void* p) {
-  if ((reinterpret_cast<std::uintptr_t>(p) & (kUnit - 1)) != kHeader) return false;
+  if ((reinterpret_cast<std::uintptr_t>(p) & (kUnit - 1)) != 0) return false;
   for (auto& slot : live) {
     void* mine = p;
-    if (slot.load(std::memory_order_relaxed) == p &&
-        slot.compare_exchange_strong(mine, nullptr, std::memory_order_acq_rel)) {
-      const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(p) - kHeader;
-      release_mapping(base, *reinterpret_cast<std::size_t*>(base));
+    if (slot.block.load(std::memory_order_relaxed) != p) continue;
+    // The length first: once the slot is free, another block may take it.
+    const std::size_t length = slot.length.load(std::memory_order_relaxed);
+    if (slot.block.compare_exchange_strong(mine, nullptr, std::memory_order_acq_rel)) {
+      release_mapping(reinterpret_cast<std::uintptr_t>(p), length);
       return true;
     }
   }
@@ -172,7 +177,7 @@ bool unmap_large(void* p) {
 }
 
 void* allocate(std::size_t size, std::size_t align) {
-  if (size >= kMedium && align <= kHeader)
+  if (size >= kMedium && align <= kUnit)
     if (void* p = map_large(size, size < kMinBlock)) return p;
   void* p = align <= alignof(std::max_align_t)
                 ? std::malloc(size ? size : 1)

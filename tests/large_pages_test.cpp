@@ -24,11 +24,11 @@ constexpr std::size_t kMiB = std::size_t{1} << 20;
 
 std::uintptr_t address(const void* p) { return reinterpret_cast<std::uintptr_t>(p); }
 
-TEST(LargePages, LargeBlocksStart64BytesIntoA2MiBAlignedMapping) {
+TEST(LargePages, LargeBlocksStartA2MiBAlignedMapping) {
   rayfarm::large_pages::drop_spares();  // with no spare to cut them from
   for (std::size_t size : {2 * kMiB, 2 * kMiB + 1, 7 * kMiB + 3, 64 * kMiB}) {
     char* p = static_cast<char*>(::operator new(size));
-    EXPECT_EQ(address(p) % (2 * kMiB), 64u) << size;
+    EXPECT_EQ(address(p) % (2 * kMiB), 0u) << size;
     std::memset(p, 0x5a, size);  // every byte is writable
     EXPECT_EQ(p[size - 1], 0x5a);
     ::operator delete(p);
@@ -36,33 +36,38 @@ TEST(LargePages, LargeBlocksStart64BytesIntoA2MiBAlignedMapping) {
 }
 
 // A freed large block's mapping is kept, its pages faulted in already, and the next large
-// blocks are cut from it: the smallest spare that holds them, at 2 MB boundaries.
+// blocks are cut from it: the smallest spare that holds them, at 2 MB boundaries; freed
+// pieces join the spares beside them.
 TEST(LargePages, FreedMappingsAreCutForTheNextLargeBlocks) {
   rayfarm::large_pages::drop_spares();  // other tests' blocks
-  char* big = static_cast<char*>(::operator new(100 * kMiB));  // a 102 MB mapping
-  big[0] = big[100 * kMiB - 1] = 1;
-  const std::uintptr_t base = address(big) - 64;
+  char* big = static_cast<char*>(::operator new(101 * kMiB));  // a 102 MB mapping
+  big[0] = big[101 * kMiB - 1] = 1;
+  const std::uintptr_t base = address(big);
   ::operator delete(big);
-  char* a = static_cast<char*>(::operator new(70 * kMiB));  // its first 72 MB
-  char* b = static_cast<char*>(::operator new(20 * kMiB));  // 22 of the 30 MB left
-  EXPECT_EQ(address(a) - 64, base);
-  EXPECT_EQ(address(b) - 64, base + 72 * kMiB);
-  std::memset(a, 2, 70 * kMiB);
-  std::memset(b, 3, 20 * kMiB);
-  EXPECT_EQ(a[70 * kMiB - 1], 2);
+  char* a = static_cast<char*>(::operator new(70 * kMiB - 1));  // its first 70 MB
+  char* b = static_cast<char*>(::operator new(21 * kMiB));      // 22 of the 32 MB left
+  EXPECT_EQ(address(a), base);
+  EXPECT_EQ(address(b), base + 70 * kMiB);
+  std::memset(a, 2, 70 * kMiB - 1);
+  std::memset(b, 3, 21 * kMiB);
+  EXPECT_EQ(a[70 * kMiB - 2], 2);
   EXPECT_EQ(b[0], 3);
   ::operator delete(a);
+  // Spares of 70 and 10 MB (b between them): 8 MB comes from the smaller.
+  char* d = static_cast<char*>(::operator new(8 * kMiB));
+  EXPECT_EQ(address(d), base + 92 * kMiB);
+  ::operator delete(d);
   ::operator delete(b);
-  // Freed again, each piece is a spare of its own: 60 MB fits a's 72, not b's 22 or the 8.
-  char* c = static_cast<char*>(::operator new(60 * kMiB));
-  EXPECT_EQ(address(c) - 64, base);
+  // Freed, the pieces join again: 100 MB fits at the start.
+  char* c = static_cast<char*>(::operator new(100 * kMiB));
+  EXPECT_EQ(address(c), base);
   ::operator delete(c);
   rayfarm::large_pages::drop_spares();
 }
 
 TEST(LargePages, BlocksBelow256KiBComeFromMalloc) {
-  // A malloc block may land 64 bytes past a 64 KB boundary now and then, never three in a
-  // row; every block here would, from a spare, and there is one to take.
+  // A malloc block may land on a 64 KB boundary now and then, never three in a row; every
+  // block here would, from a spare, and there is one to take.
   rayfarm::large_pages::drop_spares();
   char* spare = static_cast<char*>(::operator new(8 * kMiB));
   std::memset(spare, 1, 8 * kMiB);
@@ -73,7 +78,7 @@ TEST(LargePages, BlocksBelow256KiBComeFromMalloc) {
     for (void*& b : blocks) {
       b = ::operator new(size);
       static_cast<char*>(b)[size - 1] = 1;
-      cut += address(b) % (64 * 1024) == 64;
+      cut += address(b) % (64 * 1024) == 0;
     }
     EXPECT_LT(cut, 3) << size;
     for (void* b : blocks) ::operator delete(b);
@@ -85,41 +90,41 @@ TEST(LargePages, BlocksBelow256KiBComeFromMalloc) {
 // freed block touched. With none, they come from malloc, never from a mapping of their own.
 TEST(LargePages, MediumBlocksAreCutFromTouchedSparesElseFromMalloc) {
   rayfarm::large_pages::drop_spares();
-  for (std::size_t size : {kMiB / 4, kMiB, 2 * kMiB - 65}) {
+  for (std::size_t size : {kMiB / 4, kMiB, 2 * kMiB - 1}) {
     void* blocks[3];
     int cut = 0;
     for (void*& b : blocks) {
       b = ::operator new(size);
       static_cast<char*>(b)[size - 1] = 1;
-      cut += address(b) % (64 * 1024) == 64;
+      cut += address(b) % (64 * 1024) == 0;
     }
     EXPECT_LT(cut, 3) << size << ": no spare, so malloc's";
     for (void* b : blocks) ::operator delete(b);
   }
   // A spare of 8 MB whose first 2 MB were touched (a huge page, or 4 KB pages all touched).
-  char* big = static_cast<char*>(::operator new(8 * kMiB - 64));
-  std::memset(big, 1, 2 * kMiB - 64);
-  const std::uintptr_t base = address(big) - 64;
+  char* big = static_cast<char*>(::operator new(8 * kMiB));
+  std::memset(big, 1, 2 * kMiB);
+  const std::uintptr_t base = address(big);
   ::operator delete(big);
   // 1.5 MB fits in the touched part: cut there, in whole 64 KB units.
   char* a = static_cast<char*>(::operator new(3 * kMiB / 2));
-  EXPECT_EQ(address(a) - 64, base);
+  EXPECT_EQ(address(a), base);
   std::memset(a, 2, 3 * kMiB / 2);
-  // The next 1 MB would reach past it (from 1.5625 MB): malloc's.
+  // The next 1 MB would reach past it (from 1.5 MB): malloc's.
   char* b = static_cast<char*>(::operator new(kMiB));
   EXPECT_FALSE(address(b) >= base && address(b) < base + 8 * kMiB);
   std::memset(b, 3, kMiB);
   // 256 KB still fits in the touched part, after a's piece.
   char* c = static_cast<char*>(::operator new(kMiB / 4));
-  EXPECT_EQ(address(c) - 64, base + 3 * kMiB / 2 + 64 * 1024);
+  EXPECT_EQ(address(c), base + 3 * kMiB / 2);
   std::memset(c, 4, kMiB / 4);
   EXPECT_EQ(a[3 * kMiB / 2 - 1], 2);
   ::operator delete(a);
   ::operator delete(b);
   ::operator delete(c);
   // Freed, the pieces join the rest again: the whole 8 MB can be had in one block.
-  char* whole = static_cast<char*>(::operator new(8 * kMiB - 64));
-  EXPECT_EQ(address(whole) - 64, base);
+  char* whole = static_cast<char*>(::operator new(8 * kMiB));
+  EXPECT_EQ(address(whole), base);
   ::operator delete(whole);
   rayfarm::large_pages::drop_spares();
 }
