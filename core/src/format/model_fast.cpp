@@ -114,7 +114,7 @@ class FastLoader {
       t = lex_.next();
     }
     if (t.kind != Token::open || (name.empty() && spec.name_required)) return false;
-    if (!name.empty() && names_[static_cast<int>(spec.kind)].insert(name, 0)) return false;
+    if (!name.empty() && names_[static_cast<int>(spec.kind)].insert(name, {})) return false;
 
     Values values;
     for (;;) {
@@ -194,7 +194,7 @@ class FastLoader {
   std::string_view text_;
   ModelLexer lex_;
   Scene scene_;
-  NameSet<char> names_[kEntityKinds];  // names per entity kind: a repeated one is an error
+  NameSet<NoPayload> names_[kEntityKinds];  // names per entity kind: a repeated one is an error
   std::vector<std::string_view> object_materials_;  // per object: its material's name
 };
 
