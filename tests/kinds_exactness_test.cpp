@@ -200,6 +200,11 @@ Scene kinds_scene(Rng& rng, bool translucent) {
                                        [&](const Object& o) { return o.kind == kind; });
     add(s, kind, (original->material + 1) % n_materials, original->shape);
   }
+  // A far wall and a panel on it, the same plane: where the panel is, the wall wins (a plane
+  // has a lower number than any other shape), whatever structure finds the two.
+  const Plane wall{{0, 0, 1}, {-30, -20, -30}};
+  add(s, EntityKind::plane, 0, wall);
+  add(s, EntityKind::fplane, 3, FinitePlane{wall, Window{{1, 0, 0}, 60, 40}});
   return s;
 }
 
@@ -261,8 +266,9 @@ bool same(const Hit<T>& a, const Hit<T>& b) {
 
 // Rays from around and inside the scene, and secondary rays leaving the hit points (from
 // either side of the object hit), with finite and infinite limits.
+// `shared`: whether the shapes share the spheres' hierarchy (else they fit no float nodes).
 template <class T>
-void expect_same_answers(const Scene& scene, Rng& rng, int rays) {
+void expect_same_answers(const Scene& scene, Rng& rng, int rays, bool shared = true) {
   RenderOptions off;
   off.specialize = false;
   const PreparedScene<T> loop = prepare_scene<T>(scene, off, 0);
@@ -270,7 +276,10 @@ void expect_same_answers(const Scene& scene, Rng& rng, int rays) {
   ASSERT_TRUE(loop.bvh.empty());
   ASSERT_TRUE(loop.shape_bvh.empty());
   ASSERT_FALSE(fast.bvh.empty());
-  ASSERT_FALSE(fast.shape_bvh.empty()) << "the shapes must be behind their hierarchy";
+  ASSERT_EQ(fast.bvh_shapes, shared) << "the shapes must be in the spheres' hierarchy";
+  if (shared) {
+    ASSERT_FALSE(fast.shape_bvh.empty()) << "the shapes must be behind their own hierarchy too";
+  }
   ASSERT_GE(fast.shapes.size(), 8u);
   const Tracer<T> a(loop), b(fast);
   const int objects =
@@ -325,6 +334,21 @@ TEST(KindsExactness, ClosestOccludedAndTransmittanceEqualTheLoopsOnRandomScenes)
     const Scene scene = kinds_scene(rng, seed % 2 == 0);
     expect_same_answers<double>(scene, rng, 3000);
     expect_same_answers<float>(scene, rng, 3000);
+  }
+}
+
+// A shape whose box no float node can hold (a triangle 1e20 away) leaves the spheres a
+// hierarchy of their own, and the shapes their loop: the same answers again.
+TEST(KindsExactness, ShapesBeyondTheNodesLeaveTheSpheresAHierarchyOfTheirOwn) {
+  for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    Rng rng(200 + seed);
+    Scene scene = kinds_scene(rng, seed % 2 == 0);
+    Triangle far;
+    far.vertex = {glm::dvec3(1e20, 0, 0), glm::dvec3(1e20, 1, 0), glm::dvec3(1e20, 0, 1)};
+    add(scene, EntityKind::triangle, 0, far);
+    expect_same_answers<double>(scene, rng, 2000, false);
+    expect_same_answers<float>(scene, rng, 2000, false);
   }
 }
 

@@ -161,19 +161,30 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads) {
   BvhBuildOptions build;
   build.threads =
       threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  p.bvh = build_bvh(
-      p.spheres.size(),
-      [&](std::size_t i) {
-        const glm::dvec3 c(p.spheres[i].centre);
-        const double r = static_cast<double>(p.spheres[i].radius);
-        return BvhBox{c - r, c + r};
-      },
-      build);
+  auto sphere_box = [&](std::size_t i) {
+    const glm::dvec3 c(p.spheres[i].centre);
+    const double r = static_cast<double>(p.spheres[i].radius);
+    return BvhBox{c - r, c + r};
+  };
+  // The other shapes with the spheres where their boxes fit the nodes; else the spheres alone.
+  const std::size_t ns = p.spheres.size();
+  p.bvh = Bvh{};
+  if (!p.shapes.empty())
+    p.bvh = build_bvh(
+        ns + p.shapes.size(),
+        [&](std::size_t i) { return i < ns ? sphere_box(i) : shape_box(p.shapes[i - ns]); }, build);
+  p.bvh_shapes = !p.bvh.empty();
+  if (!p.bvh_shapes) p.bvh = build_bvh(ns, sphere_box, build);
   p.bvh_spheres.clear();
   if (p.bvh.empty()) return;  // coordinates out of the nodes' range: keep the loop
-  p.bvh_spheres.reserve(p.spheres.size());
-  for (std::int32_t i : p.bvh.order)
-    p.bvh_spheres.push_back({p.spheres[i].centre, p.spheres[i].radius, i});
+  p.bvh_spheres.reserve(p.bvh.order.size());
+  const std::int32_t shape_base = p.shape_base();
+  for (std::int32_t i : p.bvh.order) {
+    if (i < static_cast<std::int32_t>(ns))
+      p.bvh_spheres.push_back({p.spheres[i].centre, p.spheres[i].radius, i});
+    else
+      p.bvh_spheres.push_back({Vec3<T>(0), T(0), shape_base + (i - static_cast<std::int32_t>(ns))});
+  }
 }
 
 namespace {

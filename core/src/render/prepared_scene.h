@@ -109,6 +109,11 @@ struct PreparedScene {
 
   Bvh bvh;                                // empty: spheres are tested in a plain loop
   std::vector<BvhSphere<T>> bvh_spheres;  // the spheres in bvh.order
+  // Whether `bvh` holds the other shapes too, numbered after the spheres in bvh.order: an
+  // entry of bvh_spheres whose index is shape_base() or more names that shape's object (its
+  // centre and radius unused). One walk then finds the nearest of both, where two walks each
+  // crossed the scene (kinds-mix: 9 and 13 nodes a reflection ray).
+  bool bvh_shapes = false;
   ScreenBins screen_bins;                 // empty: primary rays use `bvh`
   // Bins over the other shapes (entries name shapes), built with screen_bins from spheres
   // around their boxes; empty: primary rays test them through shape_bvh.
@@ -147,7 +152,8 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
 // in file order): its index in scene.objects.
 std::vector<int> object_sources(const Scene& scene);
 
-// Puts the spheres behind a hierarchy (whatever their number); used by prepare_scene.
+// Puts the spheres behind a hierarchy (whatever their number), with the other shapes where
+// the scene has any (bvh_shapes); used by prepare_scene.
 template <class T>
 void build_sphere_bvh(PreparedScene<T>& scene, int threads);
 

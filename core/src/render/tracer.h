@@ -132,23 +132,38 @@ class Tracer {
   // The nearest hit with 0 < t <= t_max, in the order of Hit::beaten_by. The hierarchies,
   // when there are any, give exactly the loops' answer.
   Hit<T> closest(const Vec3<T>& o, const Vec3<T>& d, Origin from, T t_max) const {
-    // Planes and the other shapes first: a sphere beyond the nearest of them cannot be the
-    // answer, so its t bounds the sphere search (a sphere at exactly that t still wins:
-    // lower number).
+    BvhRay ray;
+    const bool walk = !s_.bvh.empty() && ray.init(o, d, s_.bvh.scale);
+    // Planes (and the other shapes, unless the hierarchy holds them) first: nothing beyond
+    // the nearest of them can be the answer, so its t bounds the search (a sphere at exactly
+    // that t still wins: lower number).
     Hit<T> plane;
-    closest_plane(o, d, from, t_max, plane);
+    closest_plane(o, d, from, t_max, plane, !(walk && s_.bvh_shapes));
     if (plane.object >= 0) t_max = plane.t;
     Hit<T> best;
-    BvhRay ray;
-    if (!s_.bvh.empty() && ray.init(o, d, s_.bvh.scale)) {
+    if (walk) {
       const BvhSphere<T>* spheres = s_.bvh_spheres.data();
-      bvh_closest(s_.bvh, ray, float_limit_up(t_max), [&](std::int32_t first, std::int32_t count) {
-        for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp) {
-          const T t = sphere_t(o, d, sp->centre, sp->radius, sp->index, from);
-          if (t > 0 && t <= t_max && best.beaten_by(t, sp->index)) best = {t, sp->index};
-        }
-        return float_limit_up(best.t < t_max ? best.t : t_max);
-      });
+      auto limit = [&] { return float_limit_up(best.t < t_max ? best.t : t_max); };
+      auto take = [&](T t, int object) {
+        if (t > 0 && t <= t_max && best.beaten_by(t, object)) best = {t, object};
+      };
+      if (s_.bvh_shapes) {
+        const int shape_base = s_.shape_base();
+        bvh_closest(s_.bvh, ray, limit(), [&](std::int32_t first, std::int32_t count) {
+          for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp)
+            take(sp->index < shape_base
+                     ? sphere_t(o, d, sp->centre, sp->radius, sp->index, from)
+                     : shape_t(s_.shapes[sp->index - shape_base], o, d, sp->index, from),
+                 sp->index);
+          return limit();
+        });
+      } else {
+        bvh_closest(s_.bvh, ray, limit(), [&](std::int32_t first, std::int32_t count) {
+          for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp)
+            take(sphere_t(o, d, sp->centre, sp->radius, sp->index, from), sp->index);
+          return limit();
+        });
+      }
     } else {
       const int ns = static_cast<int>(s_.spheres.size());
       for (int i = 0; i < ns; ++i) {
@@ -157,7 +172,10 @@ class Tracer {
         if (t > 0 && t <= t_max && t < best.t) best = {t, i};
       }
     }
-    return best.object >= 0 ? best : plane;
+    // The nearer, and at equal t the lower number: a shape from the hierarchy at the plane's
+    // t loses to it, a sphere wins.
+    return best.object >= 0 && (plane.object < 0 || plane.beaten_by(best.t, best.object)) ? best
+                                                                                          : plane;
   }
 
   // Lets the nearest plane or (with `shapes`) other shape with 0 < t <= t_max take best's
@@ -215,13 +233,22 @@ class Tracer {
       }
       return false;
     }
-    if (!s_.shapes.empty() && shape_blocks(o, d, from, dist, last_blocker)) return true;
     BvhRay ray;
-    if (!s_.bvh.empty() && ray.init(o, d, s_.bvh.scale)) {
+    const bool walk = !s_.bvh.empty() && ray.init(o, d, s_.bvh.scale);
+    if (!(walk && s_.bvh_shapes) && !s_.shapes.empty() &&
+        shape_blocks(o, d, from, dist, last_blocker))
+      return true;
+    if (walk) {
       const BvhSphere<T>* spheres = s_.bvh_spheres.data();
+      const int shape_base = s_.bvh_shapes ? s_.shape_base() : std::numeric_limits<int>::max();
       return bvh_any(
           s_.bvh, ray, float_limit_up(dist), [&](std::int32_t first, std::int32_t count) {
             for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp) {
+              if (sp->index >= shape_base) {
+                if (shape_blocks_one(sp->index - shape_base, o, d, from, dist))
+                  return remember(last_blocker, sp->index);
+                continue;
+              }
               const T t = sphere_t(o, d, sp->centre, sp->radius, sp->index, from);
               if (t > 0 && t < dist) return remember(last_blocker, sp->index);
             }
