@@ -52,7 +52,8 @@ struct PreparedSphere {
   int material;
 };
 
-// A sphere in the hierarchy's leaf order, with its index in the scene.
+// A sphere in the hierarchy's leaf order, with its index in the scene (or, where the
+// hierarchy holds the other shapes too, a shape's object number, the rest unused).
 template <class T>
 struct BvhSphere {
   Vec3<T> centre;
