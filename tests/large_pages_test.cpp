@@ -24,6 +24,20 @@ constexpr std::size_t kMiB = std::size_t{1} << 20;
 
 std::uintptr_t address(const void* p) { return reinterpret_cast<std::uintptr_t>(p); }
 
+// How many of three blocks of `size` bytes, allocated together, start on a 64 KB boundary
+// (as every block cut from a spare does; a malloc block now and then).
+int cut_of_three(std::size_t size) {
+  void* blocks[3];
+  int cut = 0;
+  for (void*& b : blocks) {
+    b = ::operator new(size);
+    static_cast<char*>(b)[size - 1] = 1;
+    cut += address(b) % (64 * 1024) == 0;
+  }
+  for (void* b : blocks) ::operator delete(b);
+  return cut;
+}
+
 TEST(LargePages, LargeBlocksStartA2MiBAlignedMapping) {
   rayfarm::large_pages::drop_spares();  // with no spare to cut them from
   for (std::size_t size : {2 * kMiB, 2 * kMiB + 1, 7 * kMiB + 3, 64 * kMiB}) {
@@ -72,17 +86,8 @@ TEST(LargePages, BlocksBelow256KiBComeFromMalloc) {
   char* spare = static_cast<char*>(::operator new(8 * kMiB));
   std::memset(spare, 1, 8 * kMiB);
   ::operator delete(spare);
-  for (std::size_t size : {std::size_t{64}, std::size_t{12288}, kMiB / 4 - 1}) {
-    void* blocks[3];
-    int cut = 0;
-    for (void*& b : blocks) {
-      b = ::operator new(size);
-      static_cast<char*>(b)[size - 1] = 1;
-      cut += address(b) % (64 * 1024) == 0;
-    }
-    EXPECT_LT(cut, 3) << size;
-    for (void* b : blocks) ::operator delete(b);
-  }
+  for (std::size_t size : {std::size_t{64}, std::size_t{12288}, kMiB / 4 - 1})
+    EXPECT_LT(cut_of_three(size), 3) << size;
   rayfarm::large_pages::drop_spares();
 }
 
@@ -90,17 +95,8 @@ TEST(LargePages, BlocksBelow256KiBComeFromMalloc) {
 // freed block touched. With none, they come from malloc, never from a mapping of their own.
 TEST(LargePages, MediumBlocksAreCutFromTouchedSparesElseFromMalloc) {
   rayfarm::large_pages::drop_spares();
-  for (std::size_t size : {kMiB / 4, kMiB, 2 * kMiB - 1}) {
-    void* blocks[3];
-    int cut = 0;
-    for (void*& b : blocks) {
-      b = ::operator new(size);
-      static_cast<char*>(b)[size - 1] = 1;
-      cut += address(b) % (64 * 1024) == 0;
-    }
-    EXPECT_LT(cut, 3) << size << ": no spare, so malloc's";
-    for (void* b : blocks) ::operator delete(b);
-  }
+  for (std::size_t size : {kMiB / 4, kMiB, 2 * kMiB - 1})
+    EXPECT_LT(cut_of_three(size), 3) << size << ": no spare, so malloc's";
   // A spare of 8 MB whose first 2 MB were touched (a huge page, or 4 KB pages all touched).
   char* big = static_cast<char*>(::operator new(8 * kMiB));
   std::memset(big, 1, 2 * kMiB);
