@@ -146,7 +146,10 @@ void* map_large(std::size_t size, bool medium) {
   if (size > (std::size_t{1} << 46)) return nullptr;
   const std::size_t grain = medium ? kUnit : kHuge;
   const std::size_t length = (size + grain - 1) & ~(grain - 1);
-  std::uintptr_t base = take_spare(length, medium);
+  // Pages in memory first, whatever the block: a large one cut from the untouched part of a
+  // spare faults as a fresh mapping does.
+  std::uintptr_t base = take_spare(length, true);
+  if (!base && !medium) base = take_spare(length);
   if (!base && !medium) base = map_fresh(length);
   if (!base) return nullptr;
   void* p = reinterpret_cast<void*>(base);

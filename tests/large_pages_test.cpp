@@ -50,8 +50,9 @@ TEST(LargePages, LargeBlocksStartA2MiBAlignedMapping) {
 }
 
 // A freed large block's mapping is kept, its pages faulted in already, and the next large
-// blocks are cut from it: the smallest spare that holds them, at 2 MB boundaries; freed
-// pieces join the spares beside them.
+// blocks are cut from it at 2 MB boundaries: from the smallest spare whose pages they would
+// take are all in memory, else from the smallest that holds them. Freed pieces join the
+// spares beside them.
 TEST(LargePages, FreedMappingsAreCutForTheNextLargeBlocks) {
   rayfarm::large_pages::drop_spares();  // other tests' blocks
   char* big = static_cast<char*>(::operator new(101 * kMiB));  // a 102 MB mapping
@@ -67,11 +68,17 @@ TEST(LargePages, FreedMappingsAreCutForTheNextLargeBlocks) {
   EXPECT_EQ(a[70 * kMiB - 2], 2);
   EXPECT_EQ(b[0], 3);
   ::operator delete(a);
-  // Spares of 70 and 10 MB (b between them): 8 MB comes from the smaller.
+  // Spares of 70 MB, touched, and 10 MB of which only the last 2 MB were (b between them):
+  // 8 MB comes from the larger, whose pages cost no faults.
   char* d = static_cast<char*>(::operator new(8 * kMiB));
-  EXPECT_EQ(address(d), base + 92 * kMiB);
-  ::operator delete(d);
+  EXPECT_EQ(address(d), base);
+  // b freed joins both: one spare from 8 to 102 MB, 92 to 100 untouched. No spare holds
+  // 90 MB of touched pages, so the one that holds 90 MB at all.
   ::operator delete(b);
+  char* e = static_cast<char*>(::operator new(90 * kMiB));
+  EXPECT_EQ(address(e), base + 8 * kMiB);
+  ::operator delete(e);
+  ::operator delete(d);
   // Freed, the pieces join again: 100 MB fits at the start.
   char* c = static_cast<char*>(::operator new(100 * kMiB));
   EXPECT_EQ(address(c), base);

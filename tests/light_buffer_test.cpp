@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <tuple>
 
 #include "render/prepared_scene.h"
 #include "rayfarm/render.h"
@@ -257,6 +258,69 @@ TEST(LightBuffer, ManyLightsShareAMemoryBudgetAndTheRestKeepTheHierarchy) {
   const Image fast = render_image(scene, o, 2);
   o.specialize = false;
   EXPECT_EQ(render_image(scene, o, 1), fast);
+}
+
+// The culling structures are tasks that whichever build thread is free takes (the screen
+// bins, each mirror plane's bins, each light's buffer): the same structures however many
+// threads build them, the memory budget included (kept in light order until it is spent).
+TEST(LightBuffer, CullingStructuresAreTheSameWhateverThreadsBuildThem) {
+  Rng rng(16);
+  Scene scene = random_scene(rng, 300, 4);
+  scene.materials[0].specular = glm::dvec3(0.4);  // the floor sends reflection rays: mirror bins
+  scene.lights.clear();
+  for (int i = 0; i < 40; ++i) {
+    Light& l = scene.lights.emplace_back();
+    l.name = "l" + std::to_string(i);
+    l.location = rng.point(12);
+  }
+  const PreparedScene<double> one = prepare_scene<double>(scene, {}, 0, 1);
+  ASSERT_TRUE(one.features.screen_bins);
+  ASSERT_TRUE(one.features.mirror_bins);
+  ASSERT_TRUE(one.features.light_buffers);
+  auto same_bins = [](const ScreenBins& a, const ScreenBins& b) {
+    auto key = [](const ScreenBinEntry& e) {
+      return std::tuple(e.sphere, e.near, e.x0, e.x1, e.r0, e.r1);
+    };
+    return a.tile == b.tile && a.tiles_x == b.tiles_x && a.tiles_y == b.tiles_y &&
+           a.start == b.start &&
+           std::equal(a.entries.begin(), a.entries.end(), b.entries.begin(), b.entries.end(),
+                      [&](const auto& x, const auto& y) { return key(x) == key(y); });
+  };
+  // The budget cut in: the buffers kept are the first lights', each but the first
+  // begun with no more than 64 entries a sphere spent.
+  std::size_t kept = 0;
+  double entries = 0;
+  for (const LightBuffer& lb : one.light_buffers) {
+    if (lb.empty()) break;
+    EXPECT_LE(entries, 64.0 * 300);
+    entries += static_cast<double>(lb.entries.size());
+    ++kept;
+  }
+  EXPECT_GT(kept, 0u);
+  EXPECT_LT(kept, scene.lights.size());
+  for (std::size_t i = kept; i < one.light_buffers.size(); ++i)
+    EXPECT_TRUE(one.light_buffers[i].empty()) << i;
+  for (int threads : {2, 3, 8}) {
+    const PreparedScene<double> many = prepare_scene<double>(scene, {}, 0, threads);
+    EXPECT_EQ(many.features.parts(), one.features.parts()) << threads;
+    EXPECT_TRUE(same_bins(many.screen_bins, one.screen_bins)) << threads;
+    ASSERT_EQ(many.mirror_bins.size(), one.mirror_bins.size()) << threads;
+    for (std::size_t j = 0; j < one.mirror_bins.size(); ++j)
+      EXPECT_TRUE(same_bins(many.mirror_bins[j], one.mirror_bins[j])) << threads << " " << j;
+    EXPECT_EQ(many.mirror_reach, one.mirror_reach);
+    ASSERT_EQ(many.light_buffers.size(), one.light_buffers.size()) << threads;
+    for (std::size_t i = 0; i < one.light_buffers.size(); ++i) {
+      const LightBuffer &a = many.light_buffers[i], &b = one.light_buffers[i];
+      EXPECT_EQ(a.n, b.n) << threads << " light " << i;
+      EXPECT_EQ(a.start, b.start) << threads << " light " << i;
+      EXPECT_EQ(a.around, b.around) << threads << " light " << i;
+      ASSERT_EQ(a.entries.size(), b.entries.size()) << threads << " light " << i;
+      for (std::size_t k = 0; k < a.entries.size(); ++k)
+        ASSERT_TRUE(a.entries[k].blocker == b.entries[k].blocker &&
+                    a.entries[k].near == b.entries[k].near)
+            << threads << " light " << i << " entry " << k;
+    }
+  }
 }
 
 }  // namespace

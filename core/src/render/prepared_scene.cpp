@@ -5,9 +5,12 @@
 #include "geometry/frame.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <limits>
+#include <mutex>
 #include <thread>
 #include <variant>
 
@@ -227,119 +230,169 @@ ShapeBounds shape_bounds(const PreparedScene<T>& p) {
   return out;
 }
 
-// Mirror bins for each plane that reflects primary rays (mirror_bins.h). The real reflection
-// ray strays from the mirrored primary ray by tens of epsilons of |eye|, |p| and the plane's
-// point (origin) plus tens of epsilons per unit of length (direction), and the sphere test
-// errs by tens of epsilons of the coordinates: spheres are widened by 1024 epsilons of all
-// of them together, for origins p within `reach`. The other shapes get bins of their own,
-// from the spheres about their boxes widened likewise (with their coordinates among the
-// scales: a shape's hit lies in its box, so the ray is at most |p| + those long there).
+// The ray-culling structures: the screen bins, the mirror bins and (with shadows on) the
+// light buffers, where they pay. The screen bins from a single shape on (primary rays then
+// test a shape only on the pixels it covers: a flat shape's test divides, a surface of
+// revolution's searches; lab 1.55 -> 1.36 G instructions), the rest only with the sphere
+// hierarchy. Each bins set or buffer is a task of its own, so that a thread done with the
+// hierarchy can take the ones left (lights-inside-50k: hierarchy 32 ms, the rest 42 ms on
+// one thread); what each builds does not depend on which thread builds it, or when.
 template <class T>
-void add_mirror_bins(PreparedScene<T>& p, const ShapeBounds& shapes, double view, double scale,
-                     double pad_x, double pad_y) {
-  if (!p.features.reflection || p.max_depth < 1) return;
-  const double eps = std::numeric_limits<T>::epsilon();
-  const double reach = 4 * view;
-  const ScreenCamera camera{glm::dvec3(p.eye), static_cast<double>(p.world_width),
-                            static_cast<double>(p.world_height), p.width, p.height, pad_x, pad_y};
-  constexpr double kMaxCoverage = 64;
-  for (std::size_t j = 0; j < p.planes.size(); ++j) {
-    const PreparedPlane<T>& pl = p.planes[j];
-    const PreparedMaterial<T>& m = p.materials[pl.material];
-    if (!m.reflects || m.max_specular < p.bailout) continue;  // it sends no reflection rays
-    const glm::dvec3 q(pl.point);
-    const double plane_scale = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)});
-    const double margin = 1024 * eps * (reach + view + scale + plane_scale);
-    ScreenBins bins = build_mirror_bins(camera, widened_spheres(p, margin), glm::dvec3(pl.normal),
-                                        q, kTileSize, kMaxCoverage);
-    if (bins.empty()) continue;
-    p.mirror_bins.resize(p.planes.size());
-    p.mirror_bins[j] = std::move(bins);
-    p.features.mirror_bins = true;
-    if (shapes.tight.empty()) continue;
-    const double shape_margin =
-        1024 * eps * (reach + view + std::max(scale, shapes.scale) + plane_scale);
-    p.mirror_shape_bins.resize(p.planes.size());
-    p.mirror_shape_bins[j] = build_mirror_bins(camera, shapes.widened(shape_margin),
-                                               glm::dvec3(pl.normal), q, kTileSize, kMaxCoverage);
+class RayCulling {
+ public:
+  explicit RayCulling(PreparedScene<T>& p) : p_(p) {
+    // Scales: no sphere or light has a coordinate beyond `scale_`, nor the eye beyond `view_`.
+    auto max_abs = [](const auto& v) {
+      return std::max({std::abs(static_cast<double>(v.x)), std::abs(static_cast<double>(v.y)),
+                       std::abs(static_cast<double>(v.z))});
+    };
+    for (const PreparedSphere<T>& s : p.spheres)
+      scale_ = std::max(scale_, max_abs(s.centre) + static_cast<double>(s.radius));
+    for (const PreparedLight<T>& l : p.lights) scale_ = std::max(scale_, max_abs(l.location));
+    view_ = std::max(scale_, max_abs(p.eye));
+    shapes_ = shape_bounds(p);
+    // A primary ray's direction, from the pixel's screen point, errs by a few epsilons of the
+    // window and eye coordinates; in pixels, padded 16-fold, plus half a pixel to spare and
+    // the jitter of sampling.
+    const double ww = static_cast<double>(p.world_width), wh = static_cast<double>(p.world_height);
+    const double span = ww + wh + max_abs(p.eye);  // of the screen point and the eye
+    const double jitter = p.spp > 1 ? 0.5 : 0.0;
+    pad_x_ = 0.5 + jitter + 16 * kEps * std::max(p.width - 1, 1) * span / ww;
+    pad_y_ = 0.5 + jitter + 16 * kEps * std::max(p.height - 1, 1) * span / wh;
+    const bool padded = pad_x_ <= kMaxPad && pad_y_ <= kMaxPad;
+    if (padded) tasks_.push_back([this] { screen_bins(); });
+    // The rest stands in for the sphere hierarchy: where there is none, the loop is cheaper.
+    if (p.spheres.size() < kBvhMinSpheres) return;
+    if (padded && p.features.reflection && p.max_depth >= 1) {
+      p.mirror_reach = 4 * view_;
+      // The sphere test's near root can fall short by about sqrt(epsilon) of the distance.
+      p.mirror_slack = 16 * std::sqrt(kEps);
+      p.mirror_bins.resize(p.planes.size());
+      if (!shapes_.tight.empty()) p.mirror_shape_bins.resize(p.planes.size());
+      for (std::size_t j = 0; j < p.planes.size(); ++j) {
+        const PreparedMaterial<T>& m = p.materials[p.planes[j].material];
+        if (m.reflects && !(m.max_specular < p.bailout))  // else it sends no reflection rays
+          tasks_.push_back([this, j] { mirror_bins(j); });
+      }
+    }
+    // Light buffers answer "is anything in the way"; through translucent objects the shadow
+    // ray must find every one on its way, so they step aside.
+    if (!p.features.shadows || p.features.transparency) return;
+    // Each buffer costs about one pass over the blockers (the spheres, then the spheres about
+    // the other shapes) and a few entries per blocker: past a time budget the rest of the
+    // lights keep the hierarchies (and past a memory budget, finish()).
+    constexpr double kMaxWork = 8e6;
+    const double count = static_cast<double>(p.spheres.size() + p.shapes.size());
+    const std::size_t lights =
+        std::min(p.lights.size(), static_cast<std::size_t>(kMaxWork / count));
+    p.light_buffers.resize(p.lights.size());
+    for (std::size_t i = 0; i < lights; ++i) tasks_.push_back([this, i] { light_buffer(i); });
   }
-  p.mirror_reach = reach;
-  // The sphere test's near root can fall short by about sqrt(epsilon) of the distance.
-  p.mirror_slack = 16 * std::sqrt(eps);
-}
 
-// Builds the screen bins, the mirror bins and (with shadows on) the light buffers, where they
-// pay: the screen bins from a single shape on (primary rays then test a shape only on the
-// pixels it covers: a flat shape's test divides, a surface of revolution's searches; lab
-// 1.55 -> 1.36 G instructions), the rest only with the sphere hierarchy.
-template <class T>
-void build_ray_culling(PreparedScene<T>& p) {
-  // Scales: no sphere or light has a coordinate beyond `scale`, nor the eye beyond `view`.
-  auto max_abs = [](const auto& v) {
-    return std::max({std::abs(static_cast<double>(v.x)), std::abs(static_cast<double>(v.y)),
-                     std::abs(static_cast<double>(v.z))});
-  };
-  double scale = 0;
-  for (const PreparedSphere<T>& s : p.spheres)
-    scale = std::max(scale, max_abs(s.centre) + static_cast<double>(s.radius));
-  for (const PreparedLight<T>& l : p.lights) scale = std::max(scale, max_abs(l.location));
-  const double view = std::max(scale, max_abs(p.eye));
+  // Takes tasks until none is left; from any number of threads.
+  void run() {
+    for (std::size_t k; (k = next_.fetch_add(1, std::memory_order_relaxed)) < tasks_.size();)
+      tasks_[k]();
+  }
+
+  // After every run(): what was built is kept where it pays, and said in the features.
+  void finish() {
+    PreparedScene<T>& p = p_;
+    p.features.screen_bins = !p.screen_bins.empty();
+    const bool mirrors = std::any_of(p.mirror_bins.begin(), p.mirror_bins.end(),
+                                     [](const ScreenBins& b) { return !b.empty(); });
+    if (!mirrors) {
+      p.mirror_bins.clear();
+      p.mirror_shape_bins.clear();
+    }
+    p.features.mirror_bins = mirrors;
+    // Memory a small multiple of the scene's: the lights after the budget is spent keep the
+    // hierarchies (as if the buffers were built in light order until then).
+    const double max_entries = 64.0 * static_cast<double>(p.spheres.size() + p.shapes.size());
+    double entries = 0;
+    for (LightBuffer& lb : p.light_buffers) {
+      if (entries > max_entries) lb = LightBuffer{};
+      entries += static_cast<double>(lb.entries.size());
+      p.features.light_buffers = p.features.light_buffers || !lb.empty();
+    }
+    if (!p.features.light_buffers) p.light_buffers.clear();
+  }
+
+ private:
+  static constexpr double kEps = std::numeric_limits<T>::epsilon();
+  static constexpr double kMaxPad = 64, kMaxCoverage = 64;
+
+  ScreenCamera camera() const {
+    return {glm::dvec3(p_.eye), static_cast<double>(p_.world_width),
+            static_cast<double>(p_.world_height), p_.width, p_.height, pad_x_, pad_y_};
+  }
+
   // The tracer's sphere test and ray directions, in precision T, err by a few tens of
   // epsilons of the coordinates involved; each structure widens the spheres by 256 epsilons
-  // of those: for primary rays the eye's and the scene's, for shadow rays those of points
-  // within `reach` (farther ones are not answered from the buffers) and the scene's.
-  const double eps = std::numeric_limits<T>::epsilon();
-  const double reach = 4 * scale;
-  const ShapeBounds shapes = shape_bounds(p);
-
-  // A primary ray's direction, from the pixel's screen point, errs by a few epsilons of the
-  // window and eye coordinates; in pixels, padded 16-fold, plus half a pixel to spare and
-  // the jitter of sampling.
-  const double ww = static_cast<double>(p.world_width), wh = static_cast<double>(p.world_height);
-  const double span = ww + wh + max_abs(p.eye);  // of the screen point and the eye
-  const double jitter = p.spp > 1 ? 0.5 : 0.0;
-  const double pad_x = 0.5 + jitter + 16 * eps * std::max(p.width - 1, 1) * span / ww;
-  const double pad_y = 0.5 + jitter + 16 * eps * std::max(p.height - 1, 1) * span / wh;
-  constexpr double kMaxPad = 64, kMaxCoverage = 64;
-  if (pad_x <= kMaxPad && pad_y <= kMaxPad) {
-    const ScreenCamera camera{glm::dvec3(p.eye), ww, wh, p.width, p.height, pad_x, pad_y};
-    p.screen_bins = build_screen_bins(camera, widened_spheres(p, 256 * eps * 2 * view), kTileSize,
-                                      kMaxCoverage);
-    if (!p.screen_bins.empty() && !p.shapes.empty())
-      p.shape_bins =
-          build_screen_bins(camera, shapes.widened(256 * eps * 2 * std::max(view, shapes.scale)),
-                            kTileSize, kMaxCoverage);
+  // of those: for primary rays the eye's and the scene's.
+  void screen_bins() {
+    p_.screen_bins = build_screen_bins(camera(), widened_spheres(p_, 256 * kEps * 2 * view_),
+                                       kTileSize, kMaxCoverage);
+    if (!p_.screen_bins.empty() && !p_.shapes.empty())
+      p_.shape_bins = build_screen_bins(
+          camera(), shapes_.widened(256 * kEps * 2 * std::max(view_, shapes_.scale)), kTileSize,
+          kMaxCoverage);
   }
-  p.features.screen_bins = !p.screen_bins.empty();
-  // The rest stands in for the sphere hierarchy: where there is none, the loop is cheaper.
-  if (p.spheres.size() < kBvhMinSpheres) return;
-  if (pad_x <= kMaxPad && pad_y <= kMaxPad) add_mirror_bins(p, shapes, view, scale, pad_x, pad_y);
 
-  // Light buffers answer "is anything in the way"; through translucent objects the shadow
-  // ray must find every one on its way, so they step aside.
-  if (!p.features.shadows || p.features.transparency) return;
-  // The other shapes go in too, after the spheres (LightBuffer's blocker numbers), so that a
-  // shadow ray the buffer answers needs no walk of their hierarchy: a shape's hit on the
-  // segment lies in the sphere about its box, which is listed wherever that segment can go.
-  std::vector<WidenedSphere> blockers = widened_spheres(p, 256 * eps * (reach + scale));
-  const std::vector<WidenedSphere> more =
-      shapes.widened(256 * eps * (reach + std::max(scale, shapes.scale)));
-  blockers.insert(blockers.end(), more.begin(), more.end());
-  // Each buffer costs about one pass over the blockers and a few entries per blocker: past
-  // these budgets (time, and memory a small multiple of the scene's), the rest of the
-  // lights keep the hierarchies.
-  constexpr double kMaxWork = 8e6;
-  const double count = static_cast<double>(blockers.size());
-  const double max_entries = 64.0 * count;
-  const std::size_t lights = std::min(p.lights.size(), static_cast<std::size_t>(kMaxWork / count));
-  p.light_buffers.resize(p.lights.size());
-  double entries = 0;
-  for (std::size_t i = 0; i < lights && entries <= max_entries; ++i) {
-    p.light_buffers[i] = build_light_buffer(glm::dvec3(p.lights[i].location), blockers, reach);
-    entries += static_cast<double>(p.light_buffers[i].entries.size());
-    p.features.light_buffers = p.features.light_buffers || !p.light_buffers[i].empty();
+  // Mirror bins for plane j, which reflects primary rays (mirror_bins.h). The real reflection
+  // ray strays from the mirrored primary ray by tens of epsilons of |eye|, |p| and the
+  // plane's point (origin) plus tens of epsilons per unit of length (direction), and the
+  // sphere test errs by tens of epsilons of the coordinates: spheres are widened by 1024
+  // epsilons of all of them together, for origins p within `reach`. The other shapes get bins
+  // of their own, from the spheres about their boxes widened likewise (with their coordinates
+  // among the scales: a shape's hit lies in its box, so the ray is at most |p| + those long
+  // there).
+  void mirror_bins(std::size_t j) {
+    const PreparedPlane<T>& pl = p_.planes[j];
+    const double reach = 4 * view_;
+    const glm::dvec3 q(pl.point);
+    const double plane_scale = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)});
+    const double margin = 1024 * kEps * (reach + view_ + scale_ + plane_scale);
+    p_.mirror_bins[j] = build_mirror_bins(camera(), widened_spheres(p_, margin),
+                                          glm::dvec3(pl.normal), q, kTileSize, kMaxCoverage);
+    if (p_.mirror_bins[j].empty() || shapes_.tight.empty()) return;
+    const double shape_margin =
+        1024 * kEps * (reach + view_ + std::max(scale_, shapes_.scale) + plane_scale);
+    p_.mirror_shape_bins[j] = build_mirror_bins(camera(), shapes_.widened(shape_margin),
+                                                glm::dvec3(pl.normal), q, kTileSize, kMaxCoverage);
   }
-  if (!p.features.light_buffers) p.light_buffers.clear();
+
+  // For shadow rays, points within `reach` (farther ones are not answered from the buffers)
+  // and the scene's scale. The other shapes go in too, after the spheres (LightBuffer's
+  // blocker numbers), so that a shadow ray the buffer answers needs no walk of their
+  // hierarchy: a shape's hit on the segment lies in the sphere about its box, which is
+  // listed wherever that segment can go.
+  void light_buffer(std::size_t i) {
+    const double reach = 4 * scale_;
+    std::call_once(blockers_once_, [&] {
+      blockers_ = widened_spheres(p_, 256 * kEps * (reach + scale_));
+      const std::vector<WidenedSphere> more =
+          shapes_.widened(256 * kEps * (reach + std::max(scale_, shapes_.scale)));
+      blockers_.insert(blockers_.end(), more.begin(), more.end());
+    });
+    p_.light_buffers[i] = build_light_buffer(glm::dvec3(p_.lights[i].location), blockers_, reach);
+  }
+
+  PreparedScene<T>& p_;
+  double scale_ = 0, view_ = 0, pad_x_ = 0, pad_y_ = 0;
+  ShapeBounds shapes_;
+  std::vector<std::function<void()>> tasks_;
+  std::atomic<std::size_t> next_{0};
+  std::once_flag blockers_once_;
+  std::vector<WidenedSphere> blockers_;
+};
+
+// All of them on this thread.
+template <class T>
+void build_ray_culling(PreparedScene<T>& p) {
+  RayCulling<T> culling(p);
+  culling.run();
+  culling.finish();
 }
 
 }  // namespace
@@ -374,6 +427,9 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     p.materials.push_back(pm);
   }
   const ShapeMaker<T> make{scene, cam};
+  // Room for all at once: grown by doubling, 100,000 spheres would copy themselves through
+  // 2 MB more of fresh memory than they fill.
+  p.spheres.reserve(scene.count<Sphere>());
   for (const Object& o : scene.objects)
     if (const Sphere* s = o.as<Sphere>())
       p.spheres.push_back({narrow<T>(s->center), narrow<T>(s->radius), o.material});
@@ -455,17 +511,27 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
           build_threads > 0 ? build_threads
                             : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
       if (threads > 1) {
+        // The hierarchy here, the culling structures on another thread; this one takes the
+        // culling tasks left once the hierarchy is built.
+        RayCulling<T> culling(p);
         std::exception_ptr failure;  // (out of memory) rethrown here, not on the thread
-        std::thread culling([&] {
+        std::thread helper([&] {
           try {
-            build_ray_culling(p);
+            culling.run();
           } catch (...) {
             failure = std::current_exception();
           }
         });
-        build_sphere_bvh(p, threads - 1);
-        culling.join();
+        try {
+          build_sphere_bvh(p, threads - 1);
+          culling.run();
+        } catch (...) {
+          helper.join();
+          throw;
+        }
+        helper.join();
         if (failure) std::rethrow_exception(failure);
+        culling.finish();
       } else {
         build_ray_culling(p);
         build_sphere_bvh(p, 1);

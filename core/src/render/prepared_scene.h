@@ -141,7 +141,8 @@ inline constexpr std::size_t kBvhMinSpheres = 8;
 inline constexpr std::size_t kBvhMinShapes = 4;
 
 // Converts a checked scene for rendering. `camera` is an index into scene.cameras.
-// `build_threads` (0: all cores) only changes how fast the hierarchy is built, never it.
+// `build_threads` (0: all cores) only changes how fast the hierarchy and the culling
+// structures are built, never them.
 // `spent` (optional): scene.objects itself, freed once read, before the acceleration
 // structures are built, so that they reuse its memory (fresh memory is what a large scene's
 // preparation costs most on the machines measured; docs/performance.md).
