@@ -427,8 +427,8 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     p.materials.push_back(pm);
   }
   const ShapeMaker<T> make{scene, cam};
-  // Room for all at once: grown by doubling, 100,000 spheres would copy themselves through
-  // 2 MB more of fresh memory than they fill.
+  // Room for all at once, not grown by doubling (which copies the array through every
+  // smaller block on the way).
   p.spheres.reserve(scene.count<Sphere>());
   for (const Object& o : scene.objects)
     if (const Sphere* s = o.as<Sphere>())
