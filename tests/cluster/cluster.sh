@@ -40,14 +40,27 @@ start_redis() {
   fail "redis-server did not start"
 }
 
-# start_node N: node N on a free port, one worker, short leases.
+# start_node N: node N on a free port, one worker, short leases. Ports come from below the
+# kernel's ephemeral range (32768-60999), where outgoing connections never land, and a port
+# another process holds anyway is retried with a fresh one.
 start_node() {
-  local n=$1 port=$((20000 + RANDOM % 20000))
-  "$build/server/rayfarmd" --host 127.0.0.1 --port "$port" --no-access-log --workers 1 \
-    --redis "unix://$sock" --node-id "node$n" --heartbeat-ms 100 --lease-ms 600 \
-    --unit-work 8e6 --distribute-work 1e6 >>"$dir/node$n.log" 2>&1 &
-  pids[$n]=$!; ports[$n]=$port
-  for _ in $(seq 100); do curl -sf "http://127.0.0.1:$port/healthz" >/dev/null && return 0; sleep 0.05; done
+  local n=$1 port attempt lines
+  for attempt in 1 2 3 4 5 6 7 8; do
+    lines=0; [ -f "$dir/node$n.log" ] && lines=$(wc -l <"$dir/node$n.log")
+    port=$((20000 + RANDOM % 12000))
+    "$build/server/rayfarmd" --host 127.0.0.1 --port "$port" --no-access-log --workers 1 \
+      --redis "unix://$sock" --node-id "node$n" --heartbeat-ms 100 --lease-ms 600 \
+      --unit-work 8e6 --distribute-work 1e6 >>"$dir/node$n.log" 2>&1 &
+    pids[$n]=$!; ports[$n]=$port
+    for _ in $(seq 100); do
+      curl -sf -m 2 "http://127.0.0.1:$port/healthz" >/dev/null && return 0
+      kill -0 "${pids[$n]}" 2>/dev/null || break
+      sleep 0.05
+    done
+    kill -0 "${pids[$n]}" 2>/dev/null && break  # running but not answering: a real failure
+    tail -n +"$((lines + 1))" "$dir/node$n.log" | grep -q "the port is in use" || break
+    echo "node $n: port $port taken (attempt $attempt); another" >>"$dir/node$n.log"
+  done
   fail "node $n did not start"
 }
 url() { echo "http://127.0.0.1:${ports[$1]}$2"; }

@@ -1,7 +1,7 @@
 # Shared by the load scripts: start a rayfarmd on a free loopback port and stop it at exit.
 # Sets $port and $pid; extra flags for rayfarmd come as arguments to start_server.
 build=${BUILD:-build}
-port=$((20000 + RANDOM % 20000))
+port=$((20000 + RANDOM % 12000))  # below the ephemeral range
 pid=""
 
 start_server() {

@@ -6,7 +6,7 @@ set -euo pipefail
 build=${1:-${BUILD:-build}}
 duration=${DURATION:-10}
 connections=${CONNECTIONS:-"8 32 64"}
-port=$((20000 + RANDOM % 20000))
+port=$((20000 + RANDOM % 12000))  # below the ephemeral range
 command -v wrk >/dev/null || { echo "wrk is not installed (apt-get install wrk)"; exit 1; }
 
 "$build/server/rayfarmd" --host 127.0.0.1 --port "$port" --no-access-log \
