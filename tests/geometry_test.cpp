@@ -2,6 +2,8 @@
 // that a secondary ray never hits the point it leaves from.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include "rayfarm/intersect.h"
@@ -168,6 +170,40 @@ TEST(SecondaryRays, LeavingAPlaneNeverHitsItAgain) {
     Hit<double> hit = tracer.closest(p, d, {1, false}, s.max_dist);
     EXPECT_NE(hit.object, 1);
   }
+}
+
+// The tiled planes' square parity without fmod (tracer.h tile_parity) decides as the course's
+// fmod(ix + iy, 2) rule did, in both forms: for whole sums of either sign and any size, at
+// and past the last odd number the precision holds, for -0, infinities and NaN.
+template <class T>
+void expect_parity_as_fmod(T s) {
+  const T r = std::fmod(s, T(2));
+  EXPECT_EQ(tile_parity(s) == T(0.5), r == 1 || r == -1) << s;  // plane frame: odd
+  EXPECT_EQ(tile_parity(s) != 0, r != 0) << s;                   // 2009 form: odd or not finite
+}
+
+template <class T>
+void parity_cases() {
+  constexpr T kInf = std::numeric_limits<T>::infinity();
+  const T big = std::ldexp(T(1), std::numeric_limits<T>::digits);  // 2^53 (2^24 in float)
+  for (T s : {T(0), T(-0.0), T(1), T(-1), T(2), T(-2), T(3), T(-3), T(19999), T(-20001),
+              big - 1, -(big - 1), big, -big, big + 2, big * 4, std::numeric_limits<T>::max(),
+              std::numeric_limits<T>::lowest(), kInf, -kInf,
+              std::numeric_limits<T>::quiet_NaN()})
+    expect_parity_as_fmod(s);
+  // Sums of floors as the tracer forms them, over many magnitudes.
+  std::mt19937_64 rng(16);
+  std::uniform_real_distribution<double> exponent(-2, 30), unit(-1, 1);
+  for (int i = 0; i < 20000; ++i) {
+    const T a = std::floor(static_cast<T>(unit(rng) * std::pow(2.0, exponent(rng))));
+    const T b = std::floor(static_cast<T>(unit(rng) * std::pow(2.0, exponent(rng))));
+    expect_parity_as_fmod(static_cast<T>(a + b));
+  }
+}
+
+TEST(TiledPlane, SquareParityWithoutFmodDecidesAsFmod) {
+  parity_cases<double>();
+  parity_cases<float>();
 }
 
 }  // namespace

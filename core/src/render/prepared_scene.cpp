@@ -349,7 +349,7 @@ class RayCulling {
   // there).
   void mirror_bins(std::size_t j) {
     const PreparedPlane<T>& pl = p_.planes[j];
-    const double reach = 4 * view_;
+    const double reach = p_.mirror_reach;
     const glm::dvec3 q(pl.point);
     const double plane_scale = std::max({std::abs(q.x), std::abs(q.y), std::abs(q.z)});
     const double margin = 1024 * kEps * (reach + view_ + scale_ + plane_scale);
