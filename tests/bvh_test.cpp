@@ -5,12 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
+#include <utility>
 
-#include "render/prepared_scene.h"
 #include "random_scene.h"
 #include "rayfarm/load.h"
 #include "rayfarm/render.h"
+#include "render/prepared_scene.h"
 #include "render/tracer.h"
 
 namespace rayfarm {
@@ -29,12 +31,18 @@ struct Pair {
 };
 
 template <class T>
-Pair<T> prepare_both(const Scene& scene, int threads = 2) {
+Pair<T> prepare_both(const Scene& scene, int width, int threads = 2) {
   RenderOptions o;
   o.specialize = false;  // never builds the hierarchy
   Pair<T> p{prepare_scene<T>(scene, o, 0), prepare_scene<T>(scene, o, 0)};
-  build_sphere_bvh(p.bvh, threads);
+  build_sphere_bvh(p.bvh, threads, width);
   return p;
+}
+
+// The node widths this processor can walk: 4 always, 8 with AVX2.
+std::vector<int> widths() {
+  if (bvh_best_width() == 8) return {4, 8};
+  return {4};
 }
 
 template <class T>
@@ -46,9 +54,11 @@ bool same(const Hit<T>& a, const Hit<T>& b) {
 // secondary rays leaving a hit point (from outside or inside of the object hit), with
 // finite and infinite limits; closest and occluded must agree.
 template <class T>
-void expect_same_answers(const Scene& scene, Rng& rng, double extent, int rays) {
-  const Pair<T> p = prepare_both<T>(scene);
+void expect_same_answers(const Scene& scene, Rng& rng, double extent, int rays, int width) {
+  SCOPED_TRACE("width " + std::to_string(width));
+  const Pair<T> p = prepare_both<T>(scene, width);
   ASSERT_FALSE(p.bvh.bvh.empty());
+  ASSERT_EQ(width == 8, !p.bvh.bvh.nodes8.empty());
   const Tracer<T> loop(p.loop), bvh(p.bvh);
   const int objects = static_cast<int>(p.loop.spheres.size() + p.loop.planes.size());
   int hits = 0, occluded = 0;
@@ -91,8 +101,10 @@ TEST(Bvh, ClosestAndOccludedEqualTheLoopOnRandomScenes) {
     Rng rng(seed);
     const int count = std::vector<int>{20, 200, 3000}[seed % 3];
     const Scene scene = random_scene(rng, count, 10);
-    expect_same_answers<double>(scene, rng, 10, 4000);
-    expect_same_answers<float>(scene, rng, 10, 4000);
+    for (int width : widths()) {
+      expect_same_answers<double>(scene, rng, 10, 4000, width);
+      expect_same_answers<float>(scene, rng, 10, 4000, width);
+    }
   }
 }
 
@@ -101,19 +113,22 @@ TEST(Bvh, EqualsTheLoopAtExtremeScales) {
     SCOPED_TRACE("scale " + std::to_string(scale));
     Rng rng(99);
     const Scene scene = random_scene(rng, 500, scale);
-    expect_same_answers<double>(scene, rng, scale, 3000);
-    expect_same_answers<float>(scene, rng, scale, 3000);
+    for (int width : widths()) {
+      expect_same_answers<double>(scene, rng, scale, 3000, width);
+      expect_same_answers<float>(scene, rng, scale, 3000, width);
+    }
   }
 }
 
 // Rays grazing a sphere where it touches its own box (the point of largest x, y or z): the
 // computed hit may lie a rounding error outside the box, which the slab margin must cover.
 template <class T>
-void expect_same_grazing_answers(double extent) {
+void expect_same_grazing_answers(double extent, int width) {
+  SCOPED_TRACE("width " + std::to_string(width));
   Rng rng(11);
   Scene scene = base_scene();
   for (int i = 0; i < 300; ++i) add_sphere(scene, rng.point(extent), extent * rng.in(0.001, 0.05));
-  const Pair<T> p = prepare_both<T>(scene);
+  const Pair<T> p = prepare_both<T>(scene, width);
   const Tracer<T> loop(p.loop), bvh(p.bvh);
   int hits = 0;
   for (int i = 0; i < 20000; ++i) {
@@ -141,8 +156,10 @@ void expect_same_grazing_answers(double extent) {
 TEST(Bvh, GrazingRaysAtTheBoxFacesEqualTheLoop) {
   for (double extent : {1.0, 1e-5, 1e5}) {
     SCOPED_TRACE("extent " + std::to_string(extent));
-    expect_same_grazing_answers<double>(extent);
-    expect_same_grazing_answers<float>(extent);
+    for (int width : widths()) {
+      expect_same_grazing_answers<double>(extent, width);
+      expect_same_grazing_answers<float>(extent, width);
+    }
   }
 }
 
@@ -154,25 +171,28 @@ TEST(Bvh, CoincidentSpheresResolveToTheLowestIndex) {
   for (int i = 0; i < 100; ++i)
     add_sphere(s, glm::dvec3(3 + rng.in(0, 5), 0, 0) + rng.point(3), 0.3);
   for (int i = 0; i < 16; ++i) add_sphere(s, {0, 0, -5}, 1);
-  const Pair<double> p = prepare_both<double>(s);
-  const Tracer<double> loop(p.loop), bvh(p.bvh);
-  const glm::dvec3 o(0, 0, 5);
-  Hit<double> a = loop.closest(o, {0, 0, -1}, {}, 1e300);
-  Hit<double> b = bvh.closest(o, {0, 0, -1}, {}, 1e300);
-  EXPECT_EQ(a.object, 0);
-  EXPECT_TRUE(same(a, b));
-  // Leaving twin 3 from outside: it is skipped, twin 0 (same t) is not.
-  const glm::dvec3 surface(0, 0, -4);
-  a = loop.closest(surface, {0, 0, 1}, {3, false}, 1e300);
-  b = bvh.closest(surface, {0, 0, 1}, {3, false}, 1e300);
-  EXPECT_TRUE(same(a, b));
-  for (int k = 0; k < 200; ++k) {
-    const glm::dvec3 d = rng.direction();
-    const Origin from{rng.below(32) < 16 ? rng.below(16) : 116 + rng.below(16), rng.chance(0.5)};
-    a = loop.closest(surface, d, from, 1e300);
-    b = bvh.closest(surface, d, from, 1e300);
-    ASSERT_TRUE(same(a, b)) << k;
-    ASSERT_EQ(loop.occluded(surface, d, from, 3.0), bvh.occluded(surface, d, from, 3.0)) << k;
+  for (int width : widths()) {
+    SCOPED_TRACE("width " + std::to_string(width));
+    const Pair<double> p = prepare_both<double>(s, width);
+    const Tracer<double> loop(p.loop), bvh(p.bvh);
+    const glm::dvec3 o(0, 0, 5);
+    Hit<double> a = loop.closest(o, {0, 0, -1}, {}, 1e300);
+    Hit<double> b = bvh.closest(o, {0, 0, -1}, {}, 1e300);
+    EXPECT_EQ(a.object, 0);
+    EXPECT_TRUE(same(a, b));
+    // Leaving twin 3 from outside: it is skipped, twin 0 (same t) is not.
+    const glm::dvec3 surface(0, 0, -4);
+    a = loop.closest(surface, {0, 0, 1}, {3, false}, 1e300);
+    b = bvh.closest(surface, {0, 0, 1}, {3, false}, 1e300);
+    EXPECT_TRUE(same(a, b));
+    for (int k = 0; k < 200; ++k) {
+      const glm::dvec3 d = rng.direction();
+      const Origin from{rng.below(32) < 16 ? rng.below(16) : 116 + rng.below(16), rng.chance(0.5)};
+      a = loop.closest(surface, d, from, 1e300);
+      b = bvh.closest(surface, d, from, 1e300);
+      ASSERT_TRUE(same(a, b)) << k;
+      ASSERT_EQ(loop.occluded(surface, d, from, 3.0), bvh.occluded(surface, d, from, 3.0)) << k;
+    }
   }
 }
 
@@ -182,18 +202,21 @@ TEST(Bvh, TouchingSpheresAgreeWithTheLoopAtTheContactPoint) {
   for (int i = 0; i < 40; ++i) add_sphere(s, {2.0 * i, 0, -5}, 1);
   Rng rng(8);
   for (int i = 0; i < 60; ++i) add_sphere(s, {rng.in(0, 80), rng.in(-3, 3), rng.in(-8, -2)}, 0.25);
-  const Pair<double> p = prepare_both<double>(s);
-  const Tracer<double> loop(p.loop), bvh(p.bvh);
-  for (int i = 0; i + 1 < 40; ++i) {
-    const glm::dvec3 contact(2.0 * i + 1, 0, -5);
-    for (int k = 0; k < 50; ++k) {
-      const glm::dvec3 d = rng.direction();
-      for (Origin from :
-           {Origin{i, false}, Origin{i, true}, Origin{i + 1, false}, Origin{i + 1, true}}) {
-        Hit<double> a = loop.closest(contact, d, from, 1e300);
-        Hit<double> b = bvh.closest(contact, d, from, 1e300);
-        ASSERT_TRUE(same(a, b)) << "contact " << i << " ray " << k;
-        ASSERT_EQ(loop.occluded(contact, d, from, 10.0), bvh.occluded(contact, d, from, 10.0));
+  for (int width : widths()) {
+    SCOPED_TRACE("width " + std::to_string(width));
+    const Pair<double> p = prepare_both<double>(s, width);
+    const Tracer<double> loop(p.loop), bvh(p.bvh);
+    for (int i = 0; i + 1 < 40; ++i) {
+      const glm::dvec3 contact(2.0 * i + 1, 0, -5);
+      for (int k = 0; k < 50; ++k) {
+        const glm::dvec3 d = rng.direction();
+        for (Origin from :
+             {Origin{i, false}, Origin{i, true}, Origin{i + 1, false}, Origin{i + 1, true}}) {
+          Hit<double> a = loop.closest(contact, d, from, 1e300);
+          Hit<double> b = bvh.closest(contact, d, from, 1e300);
+          ASSERT_TRUE(same(a, b)) << "contact " << i << " ray " << k;
+          ASSERT_EQ(loop.occluded(contact, d, from, 10.0), bvh.occluded(contact, d, from, 10.0));
+        }
       }
     }
   }
@@ -208,38 +231,54 @@ std::vector<BvhBox> boxes_of(const Scene& scene) {
   return boxes;
 }
 
+template <int W>
+const std::vector<BvhNodeOf<W>>& nodes_of(const Bvh& bvh) {
+  if constexpr (W == 8)
+    return bvh.nodes8;
+  else
+    return bvh.nodes;
+}
+
 TEST(Bvh, BuildIsTheSameForAnyThreadCount) {
   Rng rng(3);
   const Scene scene = random_scene(rng, 40000, 50);
   const std::vector<BvhBox> boxes = boxes_of(scene);
-  const Bvh one = build_bvh(boxes, {1, 4});
-  ASSERT_FALSE(one.empty());
-  for (int threads : {2, 3, 8}) {
-    const Bvh many = build_bvh(boxes, {threads, 4});
-    ASSERT_EQ(one.order, many.order) << threads;
-    ASSERT_EQ(one.nodes.size(), many.nodes.size()) << threads;
-    EXPECT_EQ(std::memcmp(one.nodes.data(), many.nodes.data(), one.nodes.size() * sizeof(BvhNode)),
-              0)
-        << threads;
-  }
+  auto check = [&]<int W>() {
+    SCOPED_TRACE("width " + std::to_string(W));
+    const Bvh one = build_bvh(boxes, {1, 4, W});
+    ASSERT_FALSE(one.empty());
+    ASSERT_FALSE(nodes_of<W>(one).empty());
+    for (int threads : {2, 3, 8}) {
+      const Bvh many = build_bvh(boxes, {threads, 4, W});
+      ASSERT_EQ(one.order, many.order) << threads;
+      ASSERT_EQ(nodes_of<W>(one).size(), nodes_of<W>(many).size()) << threads;
+      EXPECT_EQ(std::memcmp(nodes_of<W>(one).data(), nodes_of<W>(many).data(),
+                            nodes_of<W>(one).size() * sizeof(BvhNodeOf<W>)),
+                0)
+          << threads;
+    }
+  };
+  check.operator()<4>();
+  check.operator()<8>();  // built on any processor; only walked where AVX2 is
 }
 
-TEST(Bvh, EveryPrimitiveIsInExactlyOneLeafInsideItsNodeBox) {
-  Rng rng(4);
-  const Scene scene = random_scene(rng, 5000, 20);
-  const std::vector<BvhBox> boxes = boxes_of(scene);
-  const Bvh bvh = build_bvh(boxes, {2, 4});
+// Every primitive once, in a leaf whose box holds its box; returns the leaves' (first, count)
+// in the order a depth-first walk meets them.
+template <int W>
+std::vector<std::pair<int, int>> check_leaves(const Bvh& bvh, const std::vector<BvhBox>& boxes) {
+  std::vector<std::pair<int, int>> leaves;
   std::vector<int> seen(boxes.size(), 0);
   std::vector<std::int32_t> stack{0};
   while (!stack.empty()) {
-    const BvhNode& n = bvh.nodes[stack.back()];
+    const BvhNodeOf<W>& n = nodes_of<W>(bvh)[stack.back()];
     stack.pop_back();
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < W; ++i) {
       if (n.count[i] < 0) continue;
       if (n.count[i] == 0) {
         stack.push_back(n.child[i]);
         continue;
       }
+      leaves.emplace_back(n.child[i], n.count[i]);
       for (int k = n.child[i]; k < n.child[i] + n.count[i]; ++k) {
         const BvhBox& b = boxes[bvh.order[k]];
         ++seen[bvh.order[k]];
@@ -250,7 +289,23 @@ TEST(Bvh, EveryPrimitiveIsInExactlyOneLeafInsideItsNodeBox) {
       }
     }
   }
-  for (std::size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << i;
+  for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], 1) << i;
+  std::sort(leaves.begin(), leaves.end());
+  return leaves;
+}
+
+TEST(Bvh, EveryPrimitiveIsInExactlyOneLeafInsideItsNodeBox) {
+  Rng rng(4);
+  const Scene scene = random_scene(rng, 5000, 20);
+  const std::vector<BvhBox> boxes = boxes_of(scene);
+  const Bvh four = build_bvh(boxes, {2, 4, 4});
+  const Bvh eight = build_bvh(boxes, {2, 4, 8});
+  // Both widths collapse the same binary tree: the same leaves over the same order, the
+  // eight-wide tree in fewer, fuller nodes.
+  EXPECT_EQ(four.order, eight.order);
+  EXPECT_EQ(check_leaves<4>(four, boxes), check_leaves<8>(eight, boxes));
+  EXPECT_EQ(four.stats.leaves, eight.stats.leaves);
+  EXPECT_LT(eight.nodes8.size() * 3, four.nodes.size() * 2);
 }
 
 TEST(Bvh, DepthStaysBoundedOnDegenerateInput) {

@@ -2,8 +2,8 @@
 // Hierarchies", 2007) with 16 bins over the centroid bounds, all three axes binned in one
 // pass; the top levels are built on separate threads into their own arrays and spliced in
 // depth-first order, so the tree is the same for any thread count. The binary tree is then
-// collapsed to four children per node (each node adopts the grandchildren of its largest
-// inner children) and flattened.
+// collapsed to four or eight children per node (each node adopts the grandchildren of its
+// largest inner children) and flattened.
 #include "accel/bvh.h"
 
 #include <array>
@@ -269,31 +269,31 @@ class Builder {
   const int max_leaf_;
 };
 
-// Turns the binary tree into 4-wide nodes: a node's children are chosen by repeatedly
-// opening the inner child of largest area until there are four; its inner children are
+// Turns the binary tree into W-wide nodes: a node's children are chosen by repeatedly
+// opening the inner child of largest area until there are W; its inner children are
 // stored side by side, then each is filled in turn, depth first.
+template <int W>
 class Collapser {
  public:
-  Collapser(const std::vector<BuildNode>& tree, Bvh& out) : tree_(tree), out_(out) {}
+  using Node = BvhNodeOf<W>;
+  Collapser(const std::vector<BuildNode>& tree, std::vector<Node>& nodes, BvhStats& stats)
+      : tree_(tree), nodes_(nodes), stats_(stats) {}
 
   void run() {
-    if (tree_[0].count > 0) {  // a single leaf: a root with one slot
-      out_.nodes.emplace_back();
-      BvhNode& root = out_.nodes[0];
-      clear(root);
-      set_slot(root, 0, tree_[0]);
-    } else {
-      out_.nodes.emplace_back();
-      clear(out_.nodes[0]);
+    nodes_.reserve(tree_.size() / (W / 2) + 1);
+    nodes_.emplace_back();
+    clear(nodes_[0]);
+    if (tree_[0].count > 0)  // a single leaf: a root with one slot
+      set_slot(nodes_[0], 0, tree_[0]);
+    else
       emit(0, 0);
-    }
-    out_.stats.nodes = static_cast<int>(out_.nodes.size());
-    if (out_.stats.leaves) out_.stats.mean_leaf /= out_.stats.leaves;
+    stats_.nodes = static_cast<int>(nodes_.size());
+    if (stats_.leaves) stats_.mean_leaf /= stats_.leaves;
   }
 
  private:
-  static void clear(BvhNode& n) {
-    for (int i = 0; i < 4; ++i) {
+  static void clear(Node& n) {
+    for (int i = 0; i < W; ++i) {
       for (int a = 0; a < 3; ++a) {
         n.box[a][i] = kInf;
         n.box[3 + a][i] = -kInf;
@@ -303,7 +303,7 @@ class Collapser {
     }
   }
 
-  void set_slot(BvhNode& n, int i, const BuildNode& b) {
+  void set_slot(Node& n, int i, const BuildNode& b) {
     for (int a = 0; a < 3; ++a) {
       n.box[a][i] = b.box.lo[a];
       n.box[3 + a][i] = b.box.hi[a];
@@ -311,17 +311,17 @@ class Collapser {
     n.child[i] = b.index;
     n.count[i] = b.count;
     if (b.count > 0) {
-      ++out_.stats.leaves;
-      out_.stats.mean_leaf += b.count;  // a sum until run() ends
+      ++stats_.leaves;
+      stats_.mean_leaf += b.count;  // a sum until run() ends
     }
   }
 
-  // Fills out_.nodes[self] (allocated, cleared) with the 4-wide node for inner binary node
-  // `b`, then its inner children.
+  // Fills nodes_[self] (allocated, cleared) with the W-wide node for inner binary node `b`,
+  // then its inner children.
   void emit(std::int32_t b, std::int32_t self) {
-    std::int32_t kids[4] = {tree_[b].index, tree_[b].index + 1, -1, -1};
+    std::int32_t kids[W] = {tree_[b].index, tree_[b].index + 1};
     int k = 2;
-    while (k < 4) {
+    while (k < W) {
       int open = -1;
       float best = -1;
       for (int i = 0; i < k; ++i) {
@@ -337,29 +337,35 @@ class Collapser {
       kids[k++] = first + 1;
     }
     // The inner children side by side: one visit's next nodes are close in memory.
-    std::int32_t slot[4];
+    std::int32_t slot[W];
     for (int i = 0; i < k; ++i) {
       slot[i] = -1;
       if (tree_[kids[i]].count == 0) {
-        slot[i] = static_cast<std::int32_t>(out_.nodes.size());
-        out_.nodes.emplace_back();
-        clear(out_.nodes.back());
+        slot[i] = static_cast<std::int32_t>(nodes_.size());
+        nodes_.emplace_back();
+        clear(nodes_.back());
       }
     }
     for (int i = 0; i < k; ++i) {
       BuildNode c = tree_[kids[i]];
       if (c.count == 0) c.index = slot[i];
-      set_slot(out_.nodes[self], i, c);
+      set_slot(nodes_[self], i, c);
     }
     for (int i = 0; i < k; ++i)
       if (slot[i] >= 0) emit(kids[i], slot[i]);
   }
 
   const std::vector<BuildNode>& tree_;
-  Bvh& out_;
+  std::vector<Node>& nodes_;
+  BvhStats& stats_;
 };
 
 }  // namespace
+
+int bvh_best_width() {
+  static const int width = __builtin_cpu_supports("avx2") ? 8 : 4;
+  return width;
+}
 
 Bvh build_bvh(std::span<const BvhBox> boxes, const BvhBuildOptions& options) {
   return build_bvh(
@@ -400,8 +406,10 @@ Bvh build_bvh(std::size_t count, const std::function<BvhBox(std::size_t)>& box_o
 
   bvh.order.resize(refs.size());
   for (std::size_t i = 0; i < refs.size(); ++i) bvh.order[i] = refs[i].index;
-  bvh.nodes.reserve(tree.size() / 2 + 1);
-  Collapser(tree, bvh).run();
+  if (options.width == 8)
+    Collapser<8>(tree, bvh.nodes8, bvh.stats).run();
+  else
+    Collapser<4>(tree, bvh.nodes, bvh.stats).run();
   bvh.stats.depth = depth;
   return bvh;
 }

@@ -1,14 +1,16 @@
 // A bounding volume hierarchy over boxes (the scene's spheres): built as a binary tree by
-// binned SAH, then collapsed to four children per node and flattened into an array, so one
-// 4-wide float comparison tests all children of a node. Traversal visits leaves nearest
-// first (closest hit) or until one reports a hit (shadow rays); what a hit means is the
-// caller's business.
+// binned SAH, then collapsed to four children per node (eight on processors with AVX2) and
+// flattened into an array, so one 4-wide (8-wide) float comparison per slab tests all
+// children of a node. Traversal visits leaves nearest first (closest hit) or until one
+// reports a hit (shadow rays); what a hit means is the caller's business.
 //
 // The box test must never miss a primitive the caller's own test would hit, or the image
 // would change. Boxes are rounded outward to float and every slab is widened by a margin
 // that covers the rounding of both the slab test and the caller's intersection routine
 // (see BvhRay), so the hierarchy only ever skips what is truly out of reach.
 #pragma once
+
+#include <immintrin.h>
 
 #include <algorithm>
 #include <cmath>
@@ -27,15 +29,19 @@ struct BvhBox {
   glm::dvec3 hi;
 };
 
-// Four children side by side, each box as lo x y z, hi x y z across the four lanes.
+// W children side by side, each box as lo x y z, hi x y z across the W lanes.
 // A slot is an inner node (count 0, child = node index), a leaf (count > 0, child = first
 // primitive in `order`) or empty (count -1, an inverted box no ray meets).
-struct alignas(64) BvhNode {
-  float box[6][4];
-  std::int32_t child[4];
-  std::int32_t count[4];
+template <int W>
+struct alignas(64) BvhNodeOf {
+  float box[6][W];
+  std::int32_t child[W];
+  std::int32_t count[W];
 };
+using BvhNode = BvhNodeOf<4>;   // one SSE comparison per axis: any x86-64
+using BvhNode8 = BvhNodeOf<8>;  // one AVX comparison per axis: for processors with AVX2
 static_assert(sizeof(BvhNode) == 128);
+static_assert(sizeof(BvhNode8) == 256);
 
 struct BvhStats {
   int nodes = 0;
@@ -44,19 +50,28 @@ struct BvhStats {
   double mean_leaf = 0;
 };
 
+// The tree is stored 4-wide (`nodes`) or 8-wide (`nodes8`), never both; [0] is the root.
+// Both are the same binary tree collapsed, so they list the same leaves.
 struct Bvh {
-  std::vector<BvhNode> nodes;       // nodes[0] is the root
+  std::vector<BvhNode> nodes;
+  std::vector<BvhNode8> nodes8;
   std::vector<std::int32_t> order;  // primitive indices in leaf order
   double scale = 0;                 // largest coordinate magnitude of any box
   BvhStats stats;
 
-  bool empty() const { return nodes.empty(); }
+  bool empty() const { return nodes.empty() && nodes8.empty(); }
 };
 
 struct BvhBuildOptions {
   int threads = 1;   // the result does not depend on it
   int max_leaf = 4;  // a larger set is always split when it can be
+  int width = 4;     // 4, or 8 where bvh_best_width() says so
 };
+
+// 8 on a processor with AVX2, whose 8-wide walks below visit fewer levels; else 4. The
+// walks' answers do not depend on the width: the hit is chosen by (t, index), whatever the
+// order in which leaves are met.
+int bvh_best_width();
 
 // The smallest box around some points.
 inline BvhBox box_around(std::initializer_list<glm::dvec3> points) {
@@ -195,16 +210,10 @@ inline int pop_bit(int& mask) {
   mask &= mask - 1;
   return i;
 }
-}  // namespace bvh_detail
 
-// Visits leaves nearest first. `leaf(first, count)` tests order[first .. first + count) and
-// returns the new limit (a float no smaller than the closest hit's t so far). A node whose
-// entry lies beyond the limit is skipped; one entered exactly at the limit is not, so a
-// tie can still be resolved by the caller.
+// The walks over 4-wide nodes.
 template <class Leaf>
-void bvh_closest(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
-  using bvh_detail::Entry;
-  using bvh_detail::pop_bit;
+void closest4(const Bvh& bvh, const BvhRay& ray, float limit, Leaf& leaf) {
   Entry stack[3 * kBvhMaxDepth + 4];
   int top = 0;
   const BvhNode* nodes = bvh.nodes.data();
@@ -219,13 +228,13 @@ void bvh_closest(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
       if (mask) {
         // One child: go on. Two: the nearer now, the other later. More: sort them.
         const int i = pop_bit(mask);
-        bvh_detail::prefetch(nodes, n.child[i], n.count[i]);
+        prefetch(nodes, n.child[i], n.count[i]);
         if (!mask) {
           cur = {n.child[i], n.count[i], t[i]};
           continue;
         }
         const int j = pop_bit(mask);
-        bvh_detail::prefetch(nodes, n.child[j], n.count[j]);
+        prefetch(nodes, n.child[j], n.count[j]);
         Entry a{n.child[i], n.count[i], t[i]}, b{n.child[j], n.count[j], t[j]};
         if (b.t_near < a.t_near) std::swap(a, b);
         if (!mask) {
@@ -237,7 +246,7 @@ void bvh_closest(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
         int k = 2;
         while (mask) {
           const int c = pop_bit(mask);
-          bvh_detail::prefetch(nodes, n.child[c], n.count[c]);
+          prefetch(nodes, n.child[c], n.count[c]);
           Entry x{n.child[c], n.count[c], t[c]};
           int m = k++;
           for (; m > 0 && e[m - 1].t_near < x.t_near; --m) e[m] = e[m - 1];
@@ -261,10 +270,8 @@ void bvh_closest(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
   }
 }
 
-// Visits leaves until `leaf(first, count)` returns true (a hit); returns whether it did.
 template <class Leaf>
-bool bvh_any(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
-  using bvh_detail::pop_bit;
+bool any4(const Bvh& bvh, const BvhRay& ray, float limit, Leaf& leaf) {
   struct Slot {
     std::int32_t child, count;
   };
@@ -282,11 +289,11 @@ bool bvh_any(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
       if (mask) {
         int i = pop_bit(mask);
         while (mask) {
-          bvh_detail::prefetch(nodes, n.child[i], n.count[i]);
+          prefetch(nodes, n.child[i], n.count[i]);
           stack[top++] = {n.child[i], n.count[i]};
           i = pop_bit(mask);
         }
-        bvh_detail::prefetch(nodes, n.child[i], n.count[i]);
+        prefetch(nodes, n.child[i], n.count[i]);
         cur = {n.child[i], n.count[i]};
         continue;
       }
@@ -294,6 +301,170 @@ bool bvh_any(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
     if (top == 0) return false;
     cur = stack[--top];
   }
+}
+
+// The same walks over 8-wide nodes, compiled for AVX2 (called only where bvh_best_width()
+// chose them). The leaf callback is inlined into them and so compiled for AVX2 too: the
+// same IEEE operations (fused multiply-adds are not enabled), so the same answers.
+struct Ray8 {
+  __m256 near_origin[3], far_origin[3], inv_dir[3];
+};
+
+[[gnu::target("avx2"), gnu::always_inline]] inline Ray8 ray8(const BvhRay& r) {
+  Ray8 w;
+  for (int a = 0; a < 3; ++a) {
+    w.near_origin[a] = _mm256_set1_ps(r.near_origin[a][0]);
+    w.far_origin[a] = _mm256_set1_ps(r.far_origin[a][0]);
+    w.inv_dir[a] = _mm256_set1_ps(r.inv_dir[a][0]);
+  }
+  return w;
+}
+
+[[gnu::target("avx2"), gnu::always_inline]] inline __m256 slab8(const float* row, __m256 origin,
+                                                                __m256 inv_dir) {
+  return _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(row), origin), inv_dir);
+}
+
+// BvhRay::hits for eight children: the same operations in the same order (max and min
+// return the second operand on an unordered pair, as vmax and vmin do).
+[[gnu::target("avx2"), gnu::always_inline]] inline int hits8(const BvhNode8& n, const BvhRay& r,
+                                                             const Ray8& w, float limit,
+                                                             float (&t_near)[8]) {
+  // (No lambda for the slab: a lambda would not be compiled for AVX2.)
+  __m256 tn = slab8(n.box[r.near_row[0]], w.near_origin[0], w.inv_dir[0]);
+  __m256 tf = slab8(n.box[r.far_row[0]], w.far_origin[0], w.inv_dir[0]);
+  tn = _mm256_max_ps(tn, slab8(n.box[r.near_row[1]], w.near_origin[1], w.inv_dir[1]));
+  tf = _mm256_min_ps(tf, slab8(n.box[r.far_row[1]], w.far_origin[1], w.inv_dir[1]));
+  tn = _mm256_max_ps(tn, slab8(n.box[r.near_row[2]], w.near_origin[2], w.inv_dir[2]));
+  tf = _mm256_min_ps(tf, slab8(n.box[r.far_row[2]], w.far_origin[2], w.inv_dir[2]));
+  _mm256_store_ps(t_near, tn);
+  const __m256 in = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ),
+                                                _mm256_cmp_ps(tf, _mm256_setzero_ps(), _CMP_GE_OQ)),
+                                  _mm256_cmp_ps(tn, _mm256_set1_ps(limit), _CMP_LE_OQ));
+  return _mm256_movemask_ps(in);
+}
+
+// All four cache lines of an 8-wide inner node a walk is about to visit.
+inline void prefetch8(const BvhNode8* nodes, std::int32_t child, std::int32_t count) {
+  if (count == 0) {
+    const char* p = reinterpret_cast<const char*>(nodes + child);
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + 64);
+    __builtin_prefetch(p + 128);
+    __builtin_prefetch(p + 192);
+  }
+}
+
+// At most 7 entries are pushed per level.
+inline constexpr int kStack8 = 7 * kBvhMaxDepth + 8;
+
+template <class Leaf>
+[[gnu::target("avx2")]] void closest8(const Bvh& bvh, const BvhRay& ray, float limit, Leaf& leaf) {
+  const Ray8 w = ray8(ray);
+  Entry stack[kStack8];
+  int top = 0;
+  const BvhNode8* nodes = bvh.nodes8.data();
+  Entry cur{0, 0, 0};
+  for (;;) {
+    if (cur.count > 0) {
+      limit = leaf(cur.child, cur.count);
+    } else {
+      const BvhNode8& n = nodes[cur.child];
+      alignas(32) float t[8];
+      int mask = hits8(n, ray, w, limit, t);
+      if (mask) {
+        // One child: go on. Two: the nearer now, the other later. More: sort them.
+        const int i = pop_bit(mask);
+        prefetch8(nodes, n.child[i], n.count[i]);
+        if (!mask) {
+          cur = {n.child[i], n.count[i], t[i]};
+          continue;
+        }
+        const int j = pop_bit(mask);
+        prefetch8(nodes, n.child[j], n.count[j]);
+        Entry a{n.child[i], n.count[i], t[i]}, b{n.child[j], n.count[j], t[j]};
+        if (b.t_near < a.t_near) std::swap(a, b);
+        if (!mask) {
+          stack[top++] = b;
+          cur = a;
+          continue;
+        }
+        Entry e[8] = {b, a};  // farthest first
+        int k = 2;
+        while (mask) {
+          const int c = pop_bit(mask);
+          prefetch8(nodes, n.child[c], n.count[c]);
+          Entry x{n.child[c], n.count[c], t[c]};
+          int m = k++;
+          for (; m > 0 && e[m - 1].t_near < x.t_near; --m) e[m] = e[m - 1];
+          e[m] = x;
+        }
+        for (int q = 0; q < k - 1; ++q) stack[top + q] = e[q];
+        top += k - 1;
+        cur = e[k - 1];
+        continue;
+      }
+    }
+    for (;;) {
+      if (top == 0) return;
+      cur = stack[--top];
+      if (cur.t_near <= limit) break;
+    }
+  }
+}
+
+template <class Leaf>
+[[gnu::target("avx2")]] bool any8(const Bvh& bvh, const BvhRay& ray, float limit, Leaf& leaf) {
+  struct Slot {
+    std::int32_t child, count;
+  };
+  const Ray8 w = ray8(ray);
+  Slot stack[kStack8];
+  int top = 0;
+  const BvhNode8* nodes = bvh.nodes8.data();
+  Slot cur{0, 0};
+  for (;;) {
+    if (cur.count > 0) {
+      if (leaf(cur.child, cur.count)) return true;
+    } else {
+      const BvhNode8& n = nodes[cur.child];
+      alignas(32) float t[8];
+      int mask = hits8(n, ray, w, limit, t);
+      if (mask) {
+        int i = pop_bit(mask);
+        while (mask) {
+          prefetch8(nodes, n.child[i], n.count[i]);
+          stack[top++] = {n.child[i], n.count[i]};
+          i = pop_bit(mask);
+        }
+        prefetch8(nodes, n.child[i], n.count[i]);
+        cur = {n.child[i], n.count[i]};
+        continue;
+      }
+    }
+    if (top == 0) return false;
+    cur = stack[--top];
+  }
+}
+}  // namespace bvh_detail
+
+// Visits leaves nearest first. `leaf(first, count)` tests order[first .. first + count) and
+// returns the new limit (a float no smaller than the closest hit's t so far). A node whose
+// entry lies beyond the limit is skipped; one entered exactly at the limit is not, so a
+// tie can still be resolved by the caller.
+template <class Leaf>
+void bvh_closest(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
+  if (!bvh.nodes8.empty())
+    bvh_detail::closest8(bvh, ray, limit, leaf);
+  else
+    bvh_detail::closest4(bvh, ray, limit, leaf);
+}
+
+// Visits leaves until `leaf(first, count)` returns true (a hit); returns whether it did.
+template <class Leaf>
+bool bvh_any(const Bvh& bvh, const BvhRay& ray, float limit, Leaf&& leaf) {
+  return !bvh.nodes8.empty() ? bvh_detail::any8(bvh, ray, limit, leaf)
+                             : bvh_detail::any4(bvh, ray, limit, leaf);
 }
 
 }  // namespace rayfarm

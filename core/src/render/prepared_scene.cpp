@@ -139,7 +139,9 @@ void build_shape_bvh(PreparedScene<T>& p) {
   std::vector<BvhBox> boxes;
   boxes.reserve(p.shapes.size());
   for (const PreparedShape<T>& s : p.shapes) boxes.push_back(shape_box(s));
-  p.shape_bvh = build_bvh(boxes, {});
+  BvhBuildOptions build;
+  build.width = bvh_best_width();
+  p.shape_bvh = build_bvh(boxes, build);
 }
 
 }  // namespace
@@ -160,8 +162,9 @@ std::vector<std::string> Features::parts() const {
 }
 
 template <class T>
-void build_sphere_bvh(PreparedScene<T>& p, int threads) {
+void build_sphere_bvh(PreparedScene<T>& p, int threads, int width) {
   BvhBuildOptions build;
+  build.width = width > 0 ? width : bvh_best_width();
   build.threads =
       threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   auto sphere_box = [&](std::size_t i) {
@@ -570,7 +573,7 @@ template PreparedScene<float> prepare_scene<float>(const Scene&, const RenderOpt
                                                    std::vector<Object>*);
 template PreparedScene<double> prepare_scene<double>(const Scene&, const RenderOptions&, int, int,
                                                      std::vector<Object>*);
-template void build_sphere_bvh<float>(PreparedScene<float>&, int);
-template void build_sphere_bvh<double>(PreparedScene<double>&, int);
+template void build_sphere_bvh<float>(PreparedScene<float>&, int, int);
+template void build_sphere_bvh<double>(PreparedScene<double>&, int, int);
 
 }  // namespace rayfarm

@@ -155,8 +155,8 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
 std::vector<int> object_sources(const Scene& scene);
 
 // Puts the spheres behind a hierarchy (whatever their number), with the other shapes where
-// the scene has any (bvh_shapes); used by prepare_scene.
+// the scene has any (bvh_shapes); used by prepare_scene. `width` 4 or 8 (0: bvh_best_width()).
 template <class T>
-void build_sphere_bvh(PreparedScene<T>& scene, int threads);
+void build_sphere_bvh(PreparedScene<T>& scene, int threads, int width = 0);
 
 }  // namespace rayfarm

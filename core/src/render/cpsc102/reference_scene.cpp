@@ -177,7 +177,9 @@ void build_reference_bvh(RefScene& s) {
       s.always.push_back(static_cast<std::int32_t>(k));
     }
   }
-  s.bvh = build_bvh(boxes, {});
+  BvhBuildOptions build;
+  build.width = bvh_best_width();
+  s.bvh = build_bvh(boxes, build);
   if (s.bvh.empty()) {  // nothing to bound, or coordinates too far out: the loop
     s.always.clear();
     return;
