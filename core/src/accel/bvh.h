@@ -59,7 +59,8 @@ struct Bvh {
   double scale = 0;                 // largest coordinate magnitude of any box
   BvhStats stats;
 
-  bool empty() const { return nodes.empty() && nodes8.empty(); }
+  // (One load: `order` is filled exactly when one of the node arrays is.)
+  bool empty() const { return order.empty(); }
 };
 
 struct BvhBuildOptions {
