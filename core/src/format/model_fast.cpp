@@ -273,11 +273,14 @@ std::optional<Scene> load_model_fast(std::string_view text, std::size_t parallel
       bool tail_ok = false;
       // The tail's objects will be moved into room the head reserved and has not touched:
       // whichever part is read first faults those pages in while the other is still being
-      // read (shallow-60k: 4 MB), instead of the head after both.
+      // read (shallow-60k: 4 MB), instead of the head after both. Only as many objects'
+      // pages as the part read first has really read: an entity bound counts every '{',
+      // comments' too, and a file of commented braces must not make its reader fault in
+      // memory for objects it does not have.
       std::atomic<bool> head_reserved{false}, tail_reserved{false}, claimed{false};
-      auto prefault_room = [&head](size_t from, size_t end) {
+      auto prefault_room = [&head](size_t from, size_t count) {
         const FastLoader::Room room = head.room();
-        end = std::min(end, room.capacity);
+        const size_t end = std::min(from + count, room.capacity);
         if (end <= from) return;
         prefault(room.objects + from, (end - from) * sizeof(Object));
         prefault(room.materials + from, (end - from) * sizeof(std::string_view));
@@ -286,16 +289,19 @@ std::optional<Scene> load_model_fast(std::string_view text, std::size_t parallel
         tail.reserve(0);
         tail_reserved.store(true, std::memory_order_release);
         tail_ok = tail.parse_reserved();
-        // The head's objects end by its entity bound; the tail's count is known.
+        // The head's objects will end a few entities (its cameras, materials and lights)
+        // short of its bound: the tail's land from there.
         if (tail_ok && head_reserved.load(std::memory_order_acquire) && !claimed.exchange(true))
-          prefault_room(0, head.entity_bound() + tail.object_count());
+          prefault_room(head.entity_bound(), tail.object_count());
       });
       head.reserve(text.size() - cut);
       head_reserved.store(true, std::memory_order_release);
       const bool head_ok = head.parse_reserved();
-      // The head's count is known; the tail's is at most its entity bound.
+      // The tail's count is not known yet: as many as the head's (the cut halves the bytes),
+      // and no more than the tail's bound.
       if (head_ok && tail_reserved.load(std::memory_order_acquire) && !claimed.exchange(true))
-        prefault_room(head.object_count(), head.object_count() + tail.entity_bound());
+        prefault_room(head.object_count(),
+                      std::min(tail.entity_bound(), head.object_count() + 1024));
       reader.join();
       // Both parts read: the cut was at an entity boundary, so the answer is final (a name
       // repeated across the cut fails in one piece too). Otherwise read it in one piece.
