@@ -23,6 +23,15 @@ using bvh_simd::I4;
 using bvh_simd::vmax;
 using bvh_simd::vmin;
 
+// Surface area of the box [lo, hi] (x, y, z at [0], [1], [2]); 0 if empty. One function for
+// the build's boxes and the tree's nodes, so the collapse sees the areas the build did.
+template <class V>
+float box_area(const V& lo, const V& hi) {
+  if (!(hi[0] >= lo[0])) return 0;
+  const float e0 = hi[0] - lo[0], e1 = hi[1] - lo[1], e2 = hi[2] - lo[2];
+  return 2 * (e0 * e1 + e1 * e2 + e2 * e0);
+}
+
 // A box as two 4-wide vectors (x, y, z, and a lane nobody reads).
 struct Box3 {
   F4 lo = bvh_simd::splat(kInf);
@@ -40,11 +49,7 @@ struct Box3 {
     lo = vmin(lo, p_lo);
     hi = vmax(hi, p_hi);
   }
-  float area() const {
-    if (!(hi[0] >= lo[0])) return 0;
-    const F4 e = hi - lo;
-    return 2 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0]);
-  }
+  float area() const { return box_area(lo, hi); }
 };
 
 // A primitive during the build: its box rounded outward to float (fourth lanes zero, so no
@@ -75,11 +80,7 @@ struct BuildNode {
       hi[a] = b.hi[a];
     }
   }
-  float area() const {  // Box3::area's, operation for operation
-    if (!(hi[0] >= lo[0])) return 0;
-    const float e[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
-    return 2 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0]);
-  }
+  float area() const { return box_area(lo, hi); }
 };
 
 float round_down(double v) {

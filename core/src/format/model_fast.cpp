@@ -39,18 +39,18 @@ class FastLoader {
   // A loader for the part of a file from a line start (see load_model_fast).
   FastLoader(std::string_view rest, int first_line) : text_(rest), lex_(rest, first_line) {}
 
-  // Reads every entity; false at the first thing that is not plainly valid. `more_bytes`:
-  // the length of a part of the file whose entities will be appended to these.
-  bool parse(size_t more_bytes = 0) {
-    reserve(more_bytes);
+  // Reads every entity; false at the first thing that is not plainly valid.
+  bool parse() {
+    reserve(0);
     return parse_reserved();
   }
 
-  // An entity takes at least one '{': enough room for all spheres without regrowth. The
-  // room for a part to be appended is a bound (an entity takes 16 bytes at least), never
-  // touched unless used: the append then moves those objects once, into pages of this
-  // array, instead of moving both parts into a third one (fresh pages cost more than the
-  // moves on the machines measured).
+  // Room for this part's entities and, with `more_bytes` > 0, for those of a part of that
+  // length to be appended. An entity takes at least one '{': enough room for all spheres
+  // without regrowth. The room for a part to be appended is a bound (an entity takes 16
+  // bytes at least), never touched unless used: the append then moves those objects once,
+  // into pages of this array, instead of moving both parts into a third one (fresh pages
+  // cost more than the moves on the machines measured).
   void reserve(size_t more_bytes) {
     braces_ = 0;
     for (char c : text_) braces_ += c == '{';
