@@ -10,6 +10,9 @@
 #                                                             defaults: build 5, every scene)
 #   BEFORE=OTHER_BUILD_DIR tests/bench/vs_povray.sh ...      also runs that build's rayfarm in
 #                                                             the same rotation (before/after)
+#   RUNS_SHOWN=1 tests/bench/vs_povray.sh ...                 also prints every run's seconds and
+#                                                             the range of the runs' own ratios
+#                                                             (run i of each renderer paired)
 set -euo pipefail
 
 build=${1:-build}
@@ -77,6 +80,13 @@ for scene in "${scenes[@]}"; do
     wall povray "+I$work/$scene.pov" +W800 +H600 -A +WT2 "+O$work/$scene-pov.png" -D \
       >> "$work/$scene.pov.t"
   done
+  if [[ -n "${RUNS_SHOWN:-}" ]]; then
+    echo "  rayfarm runs: $(tr '\n' ' ' < "$work/$scene.rf")"
+    echo "  povray runs:  $(tr '\n' ' ' < "$work/$scene.pov.t")"
+    paste "$work/$scene.rf" "$work/$scene.pov.t" |
+      awk '{ r = $2 / $1; lo = NR == 1 || r < lo ? r : lo; hi = NR == 1 || r > hi ? r : hi }
+           END { printf "  ratios of paired runs: %.1fx to %.1fx\n", lo, hi }'
+  fi
   rf=$(median < "$work/$scene.rf")
   pv=$(median < "$work/$scene.pov.t")
   ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.1fx", b / a }'; }
