@@ -81,6 +81,7 @@ for scene in "${scenes[@]}"; do
       >> "$work/$scene.pov.t"
   done
   if [[ -n "${RUNS_SHOWN:-}" ]]; then
+    [[ -z "$before" ]] || echo "  before runs:  $(tr '\n' ' ' < "$work/$scene.before")"
     echo "  rayfarm runs: $(tr '\n' ' ' < "$work/$scene.rf")"
     echo "  povray runs:  $(tr '\n' ' ' < "$work/$scene.pov.t")"
     paste "$work/$scene.rf" "$work/$scene.pov.t" |
