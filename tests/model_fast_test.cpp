@@ -78,7 +78,10 @@ std::size_t resident_between(const void* from, const void* to) {
   const std::uintptr_t b = reinterpret_cast<std::uintptr_t>(to) & ~(page - 1);
   if (b <= a) return 0;
   std::vector<unsigned char> pages((b - a) / page);
-  if (mincore(reinterpret_cast<void*>(a), b - a, pages.data()) != 0) return 0;
+  if (mincore(reinterpret_cast<void*>(a), b - a, pages.data()) != 0) {
+    ADD_FAILURE() << "mincore failed: nothing measured";
+    return 0;
+  }
   return static_cast<std::size_t>(std::count_if(pages.begin(), pages.end(),
                                                 [](unsigned char p) { return p & 1; })) *
          page;

@@ -341,8 +341,10 @@ class Collapser {
       float best = -1;
       for (int i = 0; i < k; ++i) {
         const BuildNode& c = tree_[kids[i]];
-        if (c.count == 0 && c.area() > best) {
-          best = c.area();
+        if (c.count != 0) continue;
+        const float area = c.area();
+        if (area > best) {
+          best = area;
           open = i;
         }
       }
