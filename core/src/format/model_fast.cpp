@@ -289,8 +289,9 @@ std::optional<Scene> load_model_fast(std::string_view text, std::size_t parallel
         tail.reserve(0);
         tail_reserved.store(true, std::memory_order_release);
         tail_ok = tail.parse_reserved();
-        // The head's objects will end a few entities (its cameras, materials and lights)
-        // short of its bound: the tail's land from there.
+        // The tail's objects land where the head's end, a few entities (its cameras,
+        // materials and lights) short of its bound. The head's count is not known until it
+        // is read, so this faults in from the bound: those few are left to the move.
         if (tail_ok && head_reserved.load(std::memory_order_acquire) && !claimed.exchange(true))
           prefault_room(head.entity_bound(), tail.object_count());
       });
