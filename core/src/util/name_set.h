@@ -25,11 +25,20 @@ class NameSet {
     if (want > slots_.size()) rehash(want);
   }
 
+  static size_t hash(std::string_view name) { return std::hash<std::string_view>{}(name); }
+
+  // Starts loading the slot where a name of hash h is first looked for, so that a caller
+  // with other work before its find or insert does not wait for it there. Changes nothing.
+  void prefetch(size_t h) const {
+    if (!slots_.empty()) __builtin_prefetch(&slots_[h & (slots_.size() - 1)], 1);
+  }
+
   // The payload of the name, or nullptr when it is not in the set.
-  const Payload* find(std::string_view name) const {
+  const Payload* find(std::string_view name) const { return find(name, hash(name)); }
+  // The same, with h = hash(name) computed by the caller.
+  const Payload* find(std::string_view name, size_t h) const {
     if (name.size() > kMaxSize) return find_long(name);
     if (slots_.empty()) return nullptr;
-    const size_t h = std::hash<std::string_view>{}(name);
     const size_t mask = slots_.size() - 1;
     for (size_t i = h & mask;; i = (i + 1) & mask) {
       const Slot& s = slots_[i];
@@ -41,13 +50,16 @@ class NameSet {
   // Adds the name; returns the payload of the name's first insertion, or nullptr when the
   // name is new.
   const Payload* insert(std::string_view name, Payload payload) {
+    return insert(name, payload, hash(name));
+  }
+  // The same, with h = hash(name) computed by the caller.
+  const Payload* insert(std::string_view name, Payload payload, size_t h) {
     if (name.size() > kMaxSize) {
       if (const Payload* p = find_long(name)) return p;
       long_.push_back({name, payload});
       return nullptr;
     }
     if (2 * (count_ + 1) > slots_.size()) rehash(std::max<size_t>(16, 2 * slots_.size()));
-    const size_t h = std::hash<std::string_view>{}(name);
     const size_t mask = slots_.size() - 1;
     for (size_t i = h & mask;; i = (i + 1) & mask) {
       Slot& s = slots_[i];
