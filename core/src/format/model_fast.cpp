@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "format/model_lexer.h"
+#include "util/count_byte.h"
 #include "util/name_set.h"
 #include "rayfarm/model_parser.h"
 #include "rayfarm/schema.h"
@@ -52,8 +53,7 @@ class FastLoader {
   // into pages of this array, instead of moving both parts into a third one (fresh pages
   // cost more than the moves on the machines measured).
   void reserve(size_t more_bytes) {
-    braces_ = 0;
-    for (char c : text_) braces_ += c == '{';
+    braces_ = count_byte(text_, '{');
     braces_ = std::min(braces_, text_.size() / 16 + 1);  // at most one entity per 16 bytes
     const size_t room = braces_ + (more_bytes > 0 ? more_bytes / 16 + 1 : 0);
     scene_.objects.reserve(room);
@@ -288,7 +288,7 @@ size_t split_point(std::string_view text) {
 std::optional<Scene> load_model_fast(std::string_view text, std::size_t parallel_min) {
   if (text.size() >= parallel_min && std::thread::hardware_concurrency() > 1) {
     if (const size_t cut = split_point(text); cut != std::string_view::npos) {
-      const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + cut, '\n'));
+      const int line = 1 + static_cast<int>(count_byte(text.substr(0, cut), '\n'));
       FastLoader head(text.substr(0, cut)), tail(text.substr(cut), line);
       bool tail_ok = false;
       // The tail's objects will be moved into room the head reserved and has not touched:

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "format/model_lexer.h"
+#include "util/count_byte.h"
 #include "rayfarm/schema.h"
 
 namespace rayfarm {
@@ -48,9 +49,7 @@ class ModelParser {
     SceneDesc scene;
     // Room for every entity up front: growing a vector of 100,000 entities copies them and
     // touches twice the memory. An entity takes a '{' and at least ~16 bytes of text.
-    size_t braces = 0;
-    for (char c : text_)
-      braces += c == '{';
+    const size_t braces = count_byte(text_, '{');
     scene.entities.reserve(std::min(braces, text_.size() / 16 + 1));
     while (lex_.peek().kind != Token::end && !diags_.truncated()) {
       const Token& t = lex_.peek();
