@@ -182,9 +182,12 @@ class FastLoader {
       }
       const int hi = value_count(attr->kind)[1];
       int n = 0;
-      while (lex_.peek().kind == Token::word && starts_like_number(lex_.peek().text)) {
+      for (;;) {
+        const Token& value = lex_.peek();
+        if (value.kind != Token::word || !starts_like_number(value.text)) break;
         if (n == hi) return false;
-        const std::optional<double> x = parse_number(lex_.next().text);
+        const std::optional<double> x = parse_number(value.text);
+        lex_.drop();
         if (!x || !value_in_range(*attr, *x)) return false;
         values.v[k][n++] = *x;
       }

@@ -33,7 +33,7 @@ ModelLexer::ModelLexer(std::string_view text) : text_(text) {
   if (text_.starts_with("\xEF\xBB\xBF")) pos_ = line_start_ = 3;
 }
 
-Token ModelLexer::scan() {
+void ModelLexer::scan(Token& t) {
   const char* p = text_.data();
   const size_t n = text_.size();
   size_t pos = pos_;
@@ -52,20 +52,20 @@ Token ModelLexer::scan() {
     if (!comment) break;
     while (pos < n && p[pos] != '\n') ++pos;
   }
-  Token t;
   t.line = line_;
   t.column = static_cast<int>(pos - line_start_) + 1;
   if (pos >= n) {
     pos_ = pos;
     t.kind = Token::end;
-    return t;
+    t.text = {};
+    return;
   }
   char c = p[pos];
   if (c == '{' || c == '}') {
     t.kind = c == '{' ? Token::open : Token::close;
     t.text = text_.substr(pos, 1);
     pos_ = pos + 1;
-    return t;
+    return;
   }
   size_t start = pos;
   while (pos < n) {
@@ -79,7 +79,6 @@ Token ModelLexer::scan() {
   pos_ = pos;
   t.kind = Token::word;
   t.text = text_.substr(start, pos - start);
-  return t;
 }
 
 bool is_nan_or_inf_word(std::string_view s) {

@@ -46,19 +46,32 @@ class ModelLexer {
   ModelLexer(std::string_view rest, int first_line) : text_(rest), line_(first_line) {}
 
   const Token& peek(int ahead = 0) {
-    while (buffered_ <= ahead) buffer_[buffered_++] = scan();
+    while (buffered_ <= ahead) scan(buffer_[buffered_++]);
     return buffer_[ahead];
   }
   Token next() {
+    // One named token, so that it is the caller's own (no copy): with nothing looked ahead
+    // it is scanned straight into it. (A token written field by field and then copied
+    // whole waits for those stores to land.)
+    Token t;
+    if (buffered_ == 0) {
+      scan(t);
+    } else {
+      t = buffer_[0];
+      for (int i = 1; i < buffered_; ++i) buffer_[i - 1] = buffer_[i];
+      --buffered_;
+    }
+    return t;
+  }
+  // next() for a token already looked at (peek): dropped, not copied.
+  void drop() {
     peek(0);
-    Token t = buffer_[0];
     for (int i = 1; i < buffered_; ++i) buffer_[i - 1] = buffer_[i];
     --buffered_;
-    return t;
   }
 
  private:
-  Token scan();
+  void scan(Token& t);
 
   static constexpr int kLookahead = 3;
   std::string_view text_;
