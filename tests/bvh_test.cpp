@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <map>
 #include <utility>
 
 #include "random_scene.h"
@@ -306,6 +307,81 @@ TEST(Bvh, EveryPrimitiveIsInExactlyOneLeafInsideItsNodeBox) {
   EXPECT_EQ(check_leaves<4>(four, boxes), check_leaves<8>(eight, boxes));
   EXPECT_EQ(four.stats.leaves, eight.stats.leaves);
   EXPECT_LT(eight.nodes8.size() * 3, four.nodes.size() * 2);
+}
+
+// Leaves merged when collapsing, at either width: each primitive still in exactly one leaf
+// inside its box, each merged leaf a run of the plain tree's leaves over cheap primitives
+// only, at most merge_max of them; fewer nodes.
+template <int W>
+void check_merged(const std::vector<BvhBox>& boxes, std::size_t cheap) {
+  BvhBuildOptions plain{2, 4, W};
+  BvhBuildOptions merging = plain;
+  merging.merge_max = 8;
+  merging.merge_below = cheap;
+  const Bvh a = build_bvh(boxes, plain), b = build_bvh(boxes, merging);
+  ASSERT_EQ(a.order, b.order);  // one binary tree, collapsed two ways
+  const auto plain_leaves = check_leaves<W>(a, boxes), merged_leaves = check_leaves<W>(b, boxes);
+  std::map<int, int> plain_at(plain_leaves.begin(), plain_leaves.end());
+  int merged = 0;
+  for (const auto& [first, count] : merged_leaves) {
+    if (plain_at.count(first) && plain_at[first] == count) continue;
+    ++merged;
+    EXPECT_LE(count, 8);
+    int k = first;  // whole plain leaves, end to end
+    while (k < first + count) {
+      ASSERT_TRUE(plain_at.count(k)) << "a merged leaf cuts a leaf at " << k;
+      k += plain_at[k];
+    }
+    EXPECT_EQ(k, first + count);
+    for (int i = first; i < first + count; ++i)
+      EXPECT_LT(static_cast<std::size_t>(b.order[i]), cheap) << "a dear primitive merged";
+  }
+  EXPECT_GT(merged, 0);
+  EXPECT_LT(nodes_of<W>(b).size(), nodes_of<W>(a).size());
+}
+
+TEST(Bvh, SmallSubtreesOfCheapPrimitivesBecomeOneLeaf) {
+  Rng rng(4);
+  const Scene scene = random_scene(rng, 5000, 20);
+  const std::vector<BvhBox> boxes = boxes_of(scene);
+  check_merged<4>(boxes, boxes.size() - 500);  // the last 500 stand for dearer shapes
+  check_merged<8>(boxes, boxes.size() - 500);
+}
+
+// Merging is priced: eight boxes that overlap are cheaper as one leaf than behind a node,
+// eight specks spread over a wide box are not (a ray meeting the wide box meets few).
+TEST(Bvh, MergesTightGroupsAndKeepsSparseOnesApart) {
+  std::vector<BvhBox> boxes;
+  std::vector<bool> tight;
+  for (int g = 0; g < 64; ++g) {
+    const glm::dvec3 at(100.0 * (g % 8), 100.0 * (g / 8), 0);
+    for (int i = 0; i < 8; ++i) {
+      const glm::dvec3 jitter(0.01 * i, 0.013 * (i % 3), 0.007 * (i % 5));
+      if (g % 2 == 0) {
+        boxes.push_back({at + jitter - 1.0, at + jitter + 1.0});
+      } else {
+        const glm::dvec3 c = at + 10.0 * glm::dvec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+        boxes.push_back({c - 0.01, c + 0.01});
+      }
+      tight.push_back(g % 2 == 0);
+    }
+  }
+  BvhBuildOptions merging{1, 4, 8};
+  merging.merge_max = 8;
+  const Bvh b = build_bvh(boxes, merging);
+  int tight_in_big = 0, tight_total = 0;
+  for (const auto& [first, count] : check_leaves<8>(b, boxes)) {
+    for (int i = first; i < first + count; ++i) {
+      if (tight[b.order[i]]) {
+        ++tight_total;
+        tight_in_big += count > 4;
+      } else {
+        EXPECT_LE(count, 4) << "specks far apart merged past the price of a node";
+      }
+    }
+  }
+  EXPECT_EQ(tight_total, 64 * 4);
+  EXPECT_GT(tight_in_big, tight_total / 2);
 }
 
 TEST(Bvh, DepthStaysBoundedOnDegenerateInput) {

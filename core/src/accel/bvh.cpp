@@ -291,8 +291,15 @@ template <int W>
 class Collapser {
  public:
   using Node = BvhNodeOf<W>;
-  Collapser(const std::vector<BuildNode>& tree, std::vector<Node>& nodes, BvhStats& stats)
-      : tree_(tree), nodes_(nodes), stats_(stats) {}
+  Collapser(const std::vector<BuildNode>& tree, std::vector<Node>& nodes, BvhStats& stats,
+            const std::vector<std::int32_t>& order, const BvhBuildOptions& options)
+      : tree_(tree),
+        nodes_(nodes),
+        stats_(stats),
+        order_(order),
+        merge_max_(options.merge_max),
+        merge_below_(options.merge_below),
+        merge_node_cost_(options.merge_node_cost) {}
 
   void run() {
     nodes_.reserve(tree_.size() / (W / 2) + 1);
@@ -353,11 +360,23 @@ class Collapser {
       kids[open] = first;
       kids[k++] = first + 1;
     }
+    // An inner child left unopened over a few cheap primitives becomes one leaf of them
+    // all: a node of its own would cost a whole node's bytes for a few boxes.
+    for (int i = 0; i < k && merge_max_ > 1; ++i) {
+      if (tree_[kids[i]].count != 0) continue;
+      std::int32_t first = 0, n = 0;
+      float tests = 0;  // the leaves' primitive tests, weighted by how often a ray meets them
+      if (!small_range(kids[i], first, n, tests)) continue;
+      // One leaf tests all n whenever its box is met; a node costs a visit there, then
+      // each leaf's tests where its own box is met (the surface area heuristic).
+      const float area = tree_[kids[i]].area();
+      if (static_cast<float>(n) * area <= merge_node_cost_ * area + tests) merged_[i] = {first, n};
+    }
     // The inner children side by side: one visit's next nodes are close in memory.
     std::int32_t slot[W];
     for (int i = 0; i < k; ++i) {
       slot[i] = -1;
-      if (tree_[kids[i]].count == 0) {
+      if (tree_[kids[i]].count == 0 && merged_[i].count == 0) {
         slot[i] = static_cast<std::int32_t>(nodes_.size());
         nodes_.emplace_back();
         clear(nodes_.back());
@@ -365,16 +384,46 @@ class Collapser {
     }
     for (int i = 0; i < k; ++i) {
       BuildNode c = tree_[kids[i]];
-      if (c.count == 0) c.index = slot[i];
+      if (merged_[i].count > 0) {
+        c.index = merged_[i].first;
+        c.count = merged_[i].count;
+        merged_[i] = {};
+      } else if (c.count == 0) {
+        c.index = slot[i];
+      }
       set_slot(nodes_[self], i, c);
     }
     for (int i = 0; i < k; ++i)
       if (slot[i] >= 0) emit(kids[i], slot[i]);
   }
 
+  // Whether the subtree at b holds at most merge_max_ primitives, all below merge_below_,
+  // in one run of the leaf order ([first, first + n), as a subtree's leaves always are);
+  // adds them to n.
+  bool small_range(std::int32_t b, std::int32_t& first, std::int32_t& n, float& tests) const {
+    const BuildNode& c = tree_[b];
+    if (c.count > 0) {
+      if (n == 0) first = c.index;
+      if (c.index != first + n || n + c.count > merge_max_) return false;
+      for (std::int32_t i = c.index; i < c.index + c.count; ++i)
+        if (static_cast<std::size_t>(order_[i]) >= merge_below_) return false;
+      n += c.count;
+      tests += static_cast<float>(c.count) * c.area();
+      return true;
+    }
+    return small_range(c.index, first, n, tests) && small_range(c.index + 1, first, n, tests);
+  }
+  struct Merged {
+    std::int32_t first = 0, count = 0;
+  };
   const std::vector<BuildNode>& tree_;
   std::vector<Node>& nodes_;
   BvhStats& stats_;
+  const std::vector<std::int32_t>& order_;
+  const int merge_max_;
+  const std::size_t merge_below_;
+  const float merge_node_cost_;
+  Merged merged_[W];  // per slot of the node being emitted (emptied as it is set)
 };
 
 }  // namespace
@@ -425,9 +474,9 @@ Bvh build_bvh(std::size_t count, const std::function<BvhBox(std::size_t)>& box_o
   for (std::size_t i = 0; i < refs.size(); ++i) bvh.order[i] = refs[i].index;
   std::vector<Ref>().swap(refs);  // its memory can take the nodes (new memory costs)
   if (options.width == 8)
-    Collapser<8>(tree, bvh.nodes8, bvh.stats).run();
+    Collapser<8>(tree, bvh.nodes8, bvh.stats, bvh.order, options).run();
   else
-    Collapser<4>(tree, bvh.nodes, bvh.stats).run();
+    Collapser<4>(tree, bvh.nodes, bvh.stats, bvh.order, options).run();
   bvh.stats.depth = depth;
   return bvh;
 }

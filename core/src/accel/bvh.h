@@ -67,6 +67,13 @@ struct BvhBuildOptions {
   int threads = 1;   // the result does not depend on it
   int max_leaf = 4;  // a larger set is always split when it can be
   int width = 4;     // 4, or 8 where bvh_best_width() says so
+  // Collapsing, a subtree of at most merge_max primitives, all numbered below merge_below
+  // (those cheap to test: spheres), becomes one leaf in its parent's slot instead of a
+  // node of its own (1: every leaf as the binary tree has it) where the surface area
+  // heuristic says it pays, a node visit costing merge_node_cost primitive tests.
+  int merge_max = 1;
+  std::size_t merge_below = std::numeric_limits<std::size_t>::max();
+  float merge_node_cost = 4;
 };
 
 // 8 on a processor with AVX2, whose 8-wide walks below visit fewer levels; else 4. The
