@@ -362,6 +362,9 @@ class Collapser {
     }
     // An inner child left unopened over a few cheap primitives becomes one leaf of them
     // all: a node of its own would cost a whole node's bytes for a few boxes.
+    struct Merged {
+      std::int32_t first = 0, count = 0;  // count 0: not merged
+    } merged[W];
     for (int i = 0; i < k && merge_max_ > 1; ++i) {
       if (tree_[kids[i]].count != 0) continue;
       std::int32_t first = 0, n = 0;
@@ -370,13 +373,13 @@ class Collapser {
       // One leaf tests all n whenever its box is met; a node costs a visit there, then
       // each leaf's tests where its own box is met (the surface area heuristic).
       const float area = tree_[kids[i]].area();
-      if (static_cast<float>(n) * area <= merge_node_cost_ * area + tests) merged_[i] = {first, n};
+      if (static_cast<float>(n) * area <= merge_node_cost_ * area + tests) merged[i] = {first, n};
     }
     // The inner children side by side: one visit's next nodes are close in memory.
     std::int32_t slot[W];
     for (int i = 0; i < k; ++i) {
       slot[i] = -1;
-      if (tree_[kids[i]].count == 0 && merged_[i].count == 0) {
+      if (tree_[kids[i]].count == 0 && merged[i].count == 0) {
         slot[i] = static_cast<std::int32_t>(nodes_.size());
         nodes_.emplace_back();
         clear(nodes_.back());
@@ -384,10 +387,9 @@ class Collapser {
     }
     for (int i = 0; i < k; ++i) {
       BuildNode c = tree_[kids[i]];
-      if (merged_[i].count > 0) {
-        c.index = merged_[i].first;
-        c.count = merged_[i].count;
-        merged_[i] = {};
+      if (merged[i].count > 0) {
+        c.index = merged[i].first;
+        c.count = merged[i].count;
       } else if (c.count == 0) {
         c.index = slot[i];
       }
@@ -413,9 +415,6 @@ class Collapser {
     }
     return small_range(c.index, first, n, tests) && small_range(c.index + 1, first, n, tests);
   }
-  struct Merged {
-    std::int32_t first = 0, count = 0;
-  };
   const std::vector<BuildNode>& tree_;
   std::vector<Node>& nodes_;
   BvhStats& stats_;
@@ -423,7 +422,6 @@ class Collapser {
   const int merge_max_;
   const std::size_t merge_below_;
   const float merge_node_cost_;
-  Merged merged_[W];  // per slot of the node being emitted (emptied as it is set)
 };
 
 }  // namespace
