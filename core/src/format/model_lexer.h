@@ -58,8 +58,7 @@ class ModelLexer {
       scan(t);
     } else {
       t = buffer_[0];
-      for (int i = 1; i < buffered_; ++i) buffer_[i - 1] = buffer_[i];
-      --buffered_;
+      drop();
     }
     return t;
   }
