@@ -151,11 +151,12 @@ Runner add_render(CLI::App& app) {
         std::cerr << format_diagnostic(d, display_name(args->scene), *text);
     }
 
-    // Neither the text nor the scene's objects are read past this point: freed (the text
-    // here, the objects once prepared), their memory goes to the acceleration structures
-    // instead of fresh pages, which cost a large scene more than parsing it
-    // (docs/performance.md).
+    // Neither the text, its parsed description nor the scene's objects are read past this
+    // point: freed (the text and description here, the objects once prepared), their memory
+    // goes to the acceleration structures and the render's buffers instead of fresh pages,
+    // which cost a large scene more than parsing it (docs/performance.md).
     std::string().swap(*text);
+    loaded->desc = SceneDesc{};
     ProgressBar bar(isatty(STDERR_FILENO) && !args->quiet);
     RenderStats stats;
     std::string error;

@@ -352,11 +352,12 @@ inline double first_crossing(int surfer, double height, const RevsurfRay& r, boo
   if (!search_span(surfer, height, r, span)) return -1;
   const double lo = span.lo, hi = span.hi, lipschitz = span.lipschitz, min_step = span.min_step;
   auto f = [&](double t) { return crossing_f(surfer, r, t); };
-  double t = lo, v = f(t);
+  // Off the surface a ray starts on (own), the side it is on decides: the search starts a
+  // least step in, and f at lo is never needed.
+  const double t0 = own ? std::min(hi, lo + min_step) : lo;
+  double t = t0, v = f(t0);
   const RoundingBound bound{r, surfer == 1, trust};
-  if (own) {  // off the surface it starts on: the side the ray is on decides
-    t = std::min(hi, lo + min_step);
-    v = f(t);
+  if (own) {
     if (certainly_no_crossing(f, bound, t, v, hi)) {
       if (shown) *shown = true;
       return -1;
