@@ -153,8 +153,11 @@ struct RoundingBound {
 // Whether fl(f) certainly keeps the sign it has at t (f(t) = v) at every x in [t, hi]: then
 // the stepping below meets no change of sign there and returns -1. Rays leaving a surface
 // mostly go away from it, where that is shown in a few intervals, each as wide as the
-// curvature term allows (a quarter of the margin |v| − E): a handful of evaluations instead
-// of a step each |v|/L. False when it cannot show it (the search then runs as before).
+// curvature term allows (three quarters of the margin |v| − E): a handful of evaluations
+// instead of a step each |v|/L. False when it cannot show it (the search then runs as
+// before). The width is a guess the checks below make safe whatever it is: a quarter took
+// 2.56 evaluations a ray on kinds-mix, three quarters 2.11, with 9% more rays left to the
+// search (3,702 of 267,671).
 template <class F>
 inline bool certainly_no_crossing(const F& f, const RoundingBound& bound, double t, double v,
                                   double hi) {
@@ -163,7 +166,7 @@ inline bool certainly_no_crossing(const F& f, const RoundingBound& bound, double
   for (int i = 0; i < 12; ++i) {
     const double room = std::abs(cx) - rx;
     if (!(room > 0)) return false;
-    const double step = std::sqrt(0.25 * room / bound.m2_8);
+    const double step = std::sqrt(0.75 * room / bound.m2_8);
     const bool last = !(x + step < hi);
     const double z = last ? hi : x + step, w = z - x;
     const double cz = f(z), rz = bound.at(z);
