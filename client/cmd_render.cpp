@@ -8,6 +8,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "large_pages.h"
 #include "progress_bar.h"
 #include "remote.h"
 #include "rayfarm/image_io.h"
@@ -113,6 +114,9 @@ Runner add_render(CLI::App& app) {
       std::cerr << "rayfarm: --detach saves no image: give -o (or --format) to rayfarm wait ID\n";
       return kBadInput;
     }
+    // Reading and parsing are this thread's alone: the other core faults in the heap's next
+    // pages meanwhile.
+    large_pages::Warming warming;
     auto text = read_input(args->scene);
     if (!text) return kBadInput;
     std::string out_path = args->out.empty() ? default_output(args->scene) : args->out;
@@ -131,6 +135,7 @@ Runner add_render(CLI::App& app) {
       const FileResolver files = FileResolver::beside(args->scene);
       const RecordingResolver textures(files);
       if (!load_checked(args->scene, *text, false, LoadDetail::scene, &textures)) return kBadInput;
+      warming.stop();
       ImageFormat format = format_for(out_path, args->flags);
       return remote_render(args->scene, *text, textures.files(), out_path, args->flags.as_set(),
                            std::string(to_string(format)), Remote{url, server_token(args->token)},
@@ -157,6 +162,7 @@ Runner add_render(CLI::App& app) {
     // which cost a large scene more than parsing it (docs/performance.md).
     std::string().swap(*text);
     loaded->desc = SceneDesc{};
+    warming.stop();
     ProgressBar bar(isatty(STDERR_FILENO) && !args->quiet);
     RenderStats stats;
     std::string error;

@@ -3,6 +3,7 @@
 // pages are in memory, every size and alignment is usable and freed, from several threads at
 // once, and the containers the renderer uses work on it.
 #include <gtest/gtest.h>
+#include <sys/mman.h>
 
 #include <cstdint>
 #include <cstdio>
@@ -12,11 +13,16 @@
 #include <new>
 #include <string>
 #include <thread>
+#include <chrono>
 #include <vector>
 
 namespace rayfarm::large_pages {
 void drop_spares();
-}
+void start_warming();
+void stop_warming();
+bool warming();
+std::uintptr_t heap_reach();
+}  // namespace rayfarm::large_pages
 
 namespace {
 
@@ -230,6 +236,56 @@ TEST(LargePages, VectorsGrowAcrossTheThreshold) {
   double sum = 0;
   for (double x : v) sum += x;
   EXPECT_EQ(sum, 3'000'000.0 * 2'999'999 / 2);
+}
+
+
+// Whether the 4 KB page holding `at` is in memory.
+bool in_memory(std::uintptr_t at) {
+  unsigned char v = 0;
+  return mincore(reinterpret_cast<void*>(at & ~std::uintptr_t{4095}), 4096, &v) == 0 && (v & 1);
+}
+
+// Waits up to 20 s for `done`.
+template <class F>
+bool within_seconds(F done) {
+  for (int i = 0; i < 20000 && !done(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  return done();
+}
+
+// Warming faults in the heap's huge page after the next one past the blocks operator new has
+// taken (the next is the allocating thread's own), not beyond, and stops when told; started
+// again, it follows the blocks taken since.
+TEST(LargePages, WarmingFaultsInTheHeapJustAheadOfItsBlocks) {
+  namespace lp = rayfarm::large_pages;
+  constexpr std::uintptr_t kHuge = 2 * kMiB;
+  ASSERT_FALSE(lp::warming());
+  std::vector<std::unique_ptr<char[]>> blocks;
+  blocks.emplace_back(new char[100 * 1024]);  // from malloc's heap: under 256 KB
+  std::uintptr_t page = lp::heap_reach() & ~(kHuge - 1);
+  ASSERT_NE(page, 0u) << "the heap is not on huge pages";
+  ASSERT_FALSE(in_memory(page + 2 * kHuge)) << "touched before any warming";
+  ASSERT_FALSE(in_memory(page + 3 * kHuge));
+
+  lp::start_warming();
+  EXPECT_TRUE(within_seconds([&] { return in_memory(page + 2 * kHuge); }));
+  EXPECT_TRUE(in_memory(page + 2 * kHuge + kHuge - 4096));  // the whole huge page
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_FALSE(in_memory(page + 3 * kHuge)) << "warmed further ahead than one page";
+  lp::stop_warming();
+  EXPECT_TRUE(within_seconds([&] { return !lp::warming(); }));
+
+  // Blocks taken past the warmed page, with no thread warming: nothing ahead of them moves.
+  while ((lp::heap_reach() & ~(kHuge - 1)) < page + 3 * kHuge)
+    blocks.emplace_back(new char[200 * 1024]);
+  page = lp::heap_reach() & ~(kHuge - 1);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_FALSE(in_memory(page + 2 * kHuge)) << "warmed while stopped";
+
+  lp::start_warming();
+  EXPECT_TRUE(within_seconds([&] { return in_memory(page + 2 * kHuge); }));
+  lp::stop_warming();
+  EXPECT_TRUE(within_seconds([&] { return !lp::warming(); }));
 }
 
 }  // namespace
