@@ -114,8 +114,9 @@ Runner add_render(CLI::App& app) {
       std::cerr << "rayfarm: --detach saves no image: give -o (or --format) to rayfarm wait ID\n";
       return kBadInput;
     }
-    // Reading and parsing are this thread's alone: the other core faults in the heap's next
-    // pages meanwhile.
+    // Reading the file and the general parser run on this thread alone (the reader of large
+    // sphere files takes a second): meanwhile the other core faults in the heap's page after
+    // next.
     large_pages::Warming warming;
     auto text = read_input(args->scene);
     if (!text) return kBadInput;

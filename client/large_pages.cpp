@@ -14,8 +14,8 @@
 // just before). Freed, a mapping is kept for the next large blocks, and for blocks from
 // 256 KB where its pages are in memory already (below): 4-8 MB less for shallow-60k,
 // mirror-room-20k, lights-inside-50k and camera-inside-50k.
-// While a scene loads, a thread faults in the heap's next pages on the idle core (Warming in
-// large_pages.h; below).
+// While a scene loads, a thread faults in the heap's page after next on the idle core
+// (Warming in large_pages.h; below).
 #include <malloc.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -211,9 +211,9 @@ void* allocate(std::size_t size, std::size_t align) {
 // working thread is about to fault in itself (two threads faulting one huge page both clear
 // one, and one is thrown away), the one after it is cleared on the idle core meanwhile. More
 // ahead only costs memory and, once the working thread stops allocating, the other threads'
-// time. kinds-mix after two seconds idle: loading 20.1 -> 11.4 ms (medians of 11); whole
-// runs 0.969 of the time without it, and 0.977 right after a POV-Ray run (paired medians of
-// 15 and 21 rounds).
+// time. kinds-mix after two seconds idle: loading 15.7 -> 11.4 ms (medians of 11); whole
+// runs take 0.969 times as long as without it, and 0.977 right after a POV-Ray run (paired
+// medians of 15 and 21 rounds).
 constexpr std::size_t kWarmGap = 2 * kHuge;
 constexpr std::size_t kWarmLead = kHuge;
 

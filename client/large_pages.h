@@ -1,5 +1,5 @@
 // The client's allocator (large_pages.cpp): huge pages for the heap and for large blocks, and
-// a thread that faults the heap's next pages in while the program works on one thread.
+// a thread that faults in the heap's page after next while the program loads a scene.
 #pragma once
 
 #include <cstdint>
@@ -16,10 +16,10 @@ namespace rayfarm::large_pages {
 [[gnu::weak]] std::uintptr_t heap_reach();
 
 // From construction to stop(), a thread faults in the small blocks' heap just ahead of the
-// blocks operator new has taken from it, for a stretch of work that one thread does alone
-// (loading a scene). On the virtual machines measured, memory new to the
-// process costs 1.7-2 ms per MB to fault in once the machine has been idle a few seconds;
-// on the idle core that cost leaves the working thread's path.
+// blocks operator new has taken from it, for a stretch of work mostly on one thread (loading
+// a scene). On the virtual machines measured, a huge page (2 MB) new to the process took
+// 3.5-4 ms to fault in after a pause of a few seconds (docs/performance.md, eighteenth
+// round); on the idle core that cost leaves the working thread's path.
 class Warming {
  public:
   Warming() {
