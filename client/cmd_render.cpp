@@ -115,8 +115,8 @@ Runner add_render(CLI::App& app) {
       return kBadInput;
     }
     // Reading the file and the general parser run on this thread alone (the reader of large
-    // sphere files takes a second): meanwhile the other core faults in the heap's page after
-    // next.
+    // sphere files uses a second thread): meanwhile the other core faults in the heap's page
+    // after next.
     large_pages::Warming warming;
     auto text = read_input(args->scene);
     if (!text) return kBadInput;
