@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <mutex>
 #include <unistd.h>
@@ -164,12 +165,16 @@ Runner add_render(CLI::App& app) {
     std::string().swap(*text);
     loaded->desc = SceneDesc{};
     warming.stop();
-    ProgressBar bar(isatty(STDERR_FILENO) && !args->quiet);
+    const bool show_progress = isatty(STDERR_FILENO) && !args->quiet;
+    ProgressBar bar(show_progress);
     RenderStats stats;
     std::string error;
-    Image image = render_image(
-        std::move(*loaded->scene), *options, args->threads, &stats,
-        [&bar](const RenderStats& s) { bar.update(s.progress(), s); }, nullptr, &error);
+    // No bar, no callback: the render then does not gather its statistics after every tile,
+    // under the lock the render threads take turns at (a few hundred futex calls a run).
+    std::function<void(const RenderStats&)> progress;
+    if (show_progress) progress = [&bar](const RenderStats& s) { bar.update(s.progress(), s); };
+    Image image = render_image(std::move(*loaded->scene), *options, args->threads, &stats,
+                               progress, nullptr, &error);
     bar.finish();
     if (!error.empty()) {
       std::cerr << "rayfarm: error: " << error << "\n";

@@ -1,5 +1,6 @@
 // The render job: byte-identical output for any thread count, the spp = 1 point, seeded
 // jitter, progressive passes with their stopping rules, cancellation and statistics.
+#include <algorithm>
 #include <atomic>
 #include <thread>
 
@@ -67,6 +68,43 @@ TEST(Render, AConsumedSceneRendersTheSameImageAndLosesOnlyItsObjects) {
   EXPECT_EQ(render_image(std::move(bad), o, 1, nullptr, {}, nullptr, &error).width, 0);
   EXPECT_FALSE(error.empty());
   EXPECT_EQ(bad.objects, original.objects) << "a refused render frees nothing";
+}
+
+// A render thread keeps its tile buffers from one render to the next (the primary rays, the
+// mirror bounces, the surface-of-revolution batches): a scene rendered after another, of
+// another size and with other structures, comes out as it does on a thread new to both.
+TEST(Render, AThreadThatRenderedOneSceneRendersTheNextAsANewThreadDoes) {
+  std::string busy = R"(
+camera c { pixeldim 83 57 worlddim 8 6 viewpoint 4 3 5 }
+material shiny { ambient 2 diffuse .5 specular .6 }
+material gold { ambient 2 1.5 .3 diffuse .9 .7 .2 specular .3 shininess 30 }
+light { location 2 8 2 emissivity 6 }
+plane { material shiny normal 0 1 0 point 0 0 0 }
+revsurf { material gold surfer 3 base 5.5 0 -7 direction 0 1 0 height 3 }
+revsurf { material gold surfer 1 base 1 0 -9 direction 0 1 0 height 2 }
+)";
+  for (int i = 0; i < 60; ++i)
+    busy += "sphere { material shiny center " + std::to_string(i % 10 - 1) + " " +
+            std::to_string(0.4 + i / 10 * 0.6) + " -" + std::to_string(6 + i % 7) +
+            " radius .25 }\n";
+  const Scene first = scene_from(busy), second = scene_from(kScene);
+  for (Precision precision : {Precision::f64, Precision::f32}) {
+    SCOPED_TRACE(precision == Precision::f32 ? "float" : "double");
+    RenderOptions o;
+    o.precision = precision;
+    Image alone, after, first_image;
+    RenderStats stats;
+    std::thread([&] { alone = render(second, o, 1); }).join();
+    std::thread([&] {
+      first_image = render_image(first, o, 1, &stats);
+      after = render(second, o, 1);
+    }).join();
+    for (const char* part : {"screen-bins", "mirror-bins"})
+      EXPECT_TRUE(std::count(stats.parts.begin(), stats.parts.end(), part)) << part;
+    EXPECT_EQ(first_image.width, 83);
+    EXPECT_EQ(after, alone);
+    std::thread([&] { EXPECT_EQ(render(first, o, 1), first_image); }).join();
+  }
 }
 
 TEST(Render, RepeatedRendersAreIdenticalAndSeedsChangeOnlyJitteredImages) {

@@ -34,8 +34,14 @@ class LecturePipeline {
     out.resize(static_cast<size_t>(b.width()) * b.rows());
     Tracer<T> tracer(s_);
     const bool binned = !s_.screen_bins.empty() || !s_.mirror_bins.empty();
-    std::vector<PrimaryRay> rays;
-    std::vector<BounceRay> bounces;
+    // Kept by each render thread from tile to tile. Made anew, these buffers (the bounces
+    // growing a dozen times) took malloc's lock some ten times a tile, which the render
+    // threads contend for when they share an arena (the command line keeps one, for a heap
+    // on huge pages: docs/performance.md, nineteenth round).
+    thread_local std::vector<PrimaryRay> rays;
+    thread_local std::vector<BounceRay> bounces;
+    rays.clear();
+    bounces.clear();
     if (binned) {
       first_hits(b, pass, tracer, rays);
       if (!s_.mirror_bins.empty()) bounce_hits(b, tracer, rays, bounces);
@@ -114,7 +120,8 @@ class LecturePipeline {
     const int shape_base = s_.shape_base();
     const std::span<const ScreenBinEntry> shapes =
         s_.shape_bins.empty() ? std::span<const ScreenBinEntry>() : s_.shape_bins.of_tile(tile);
-    RevsurfBatch<T, PrimaryRay*> batch;
+    thread_local RevsurfBatch<T, PrimaryRay*> batch;  // per thread, as render_tile's buffers
+    batch.clear();  // nothing left from a tile that threw part way
     auto test_shapes = [&](bool searched) {
       for (const ScreenBinEntry& e : shapes) {
         const PreparedShape<T>& shape = s_.shapes[e.sphere];
@@ -186,7 +193,8 @@ class LecturePipeline {
       used |= 1u << std::min(j, 31);
     }
     if (bounces.empty()) return;
-    RevsurfBatch<T, BounceRay*> batch;
+    thread_local RevsurfBatch<T, BounceRay*> batch;
+    batch.clear();
     const TileGrid grid(s_.width, s_.height);
     const int tile = (b.r0 / kTileSize) * grid.tiles_x + b.x0 / kTileSize;
     for (int j = 0; j < planes; ++j) {

@@ -64,7 +64,9 @@ class TiledRender final : public RenderJob {
       tile = next_tile_++;
       pass = passes_done_;
     }
-    std::vector<std::uint8_t> bytes;
+    // Per render thread, reused from tile to tile, as the pipelines' buffers are (malloc's
+    // lock: lecture_pipeline.h).
+    thread_local std::vector<std::uint8_t> bytes;
     RayCounts counts;
     bool complete = render_tile(tile, pass, bytes, counts);
     std::lock_guard lock(mu_);
@@ -148,7 +150,7 @@ class TiledRender final : public RenderJob {
   // canceled part way.
   bool render_tile(int tile, int pass, std::vector<std::uint8_t>& bytes, RayCounts& counts) {
     const TileBounds b = grid_.bounds(tile);
-    std::vector<glm::dvec3> colours;
+    thread_local std::vector<glm::dvec3> colours;
     double tile_error = 0;
     if (!p_.render_tile(b, pass, colours, counts, tile_error,
                         [&] { return cancel_.load(std::memory_order_relaxed); }))

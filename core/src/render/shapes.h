@@ -128,6 +128,11 @@ class RevsurfBatch {
     rays_.push_back(ray);
     keys_.push_back(key);
   }
+  // Drops the rays added and not run.
+  void clear() {
+    rays_.clear();
+    keys_.clear();
+  }
   // Calls f(key, t) for each ray added, t as revsurf_t gives it, and empties the batch.
   template <class F>
   void run(const PreparedShape<T>& s, F&& f) {
