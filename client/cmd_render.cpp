@@ -170,7 +170,7 @@ Runner add_render(CLI::App& app) {
     RenderStats stats;
     std::string error;
     // No bar, no callback: the render then does not gather its statistics after every tile,
-    // under the lock the render threads take turns at (a few hundred futex calls a run).
+    // under the job's lock that the render threads take turns at.
     std::function<void(const RenderStats&)> progress;
     if (show_progress) progress = [&bar](const RenderStats& s) { bar.update(s.progress(), s); };
     Image image = render_image(std::move(*loaded->scene), *options, args->threads, &stats,
