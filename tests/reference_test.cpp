@@ -71,16 +71,7 @@ TEST(ReferenceProfile, HierarchyGivesTheLoopsBytesForEveryKind) {
 // deep max_depth would double the rays per bounce (2^40 here). Each profile stops spawning
 // past a budget per primary ray, and so renders.
 TEST(BranchingRays, AStackOfTranslucentMirrorsRendersWithinABudget) {
-  // A stack of parallel planes that reflect and let through everything: every ray that
-  // meets one goes on both ways into the stack.
-  std::string text =
-      "camera c { pixeldim 4 3 worlddim 8 6 viewpoint 4 3 6 }\n"
-      "material glassy_mirror { ambient 1 1 1 diffuse 1 1 1 specular 1 transparency 1 }\n"
-      "light l { location 4 3 2 }\n";
-  for (int i = 1; i <= 10; ++i)
-    text += "plane p" + std::to_string(i) + " { material glassy_mirror normal 0 0 1 point 0 0 -" +
-            std::to_string(i) + " }\n";
-  const Scene scene = test::scene_from(text);
+  const Scene scene = test::scene_from(test::translucent_mirror_stack());
   for (const char* profile : {"lecture", "cpsc102"}) {
     SCOPED_TRACE(profile);
     RenderOptions o;

@@ -56,6 +56,19 @@ inline LoadedScene load_file(const std::string& path, std::string* text_out = nu
   return load_scene(text, LoadDetail::full, &textures);
 }
 
+// A stack of ten parallel planes that reflect and let through everything: every ray that
+// meets one goes on both ways into the stack, doubling the rays at every bounce.
+inline std::string translucent_mirror_stack() {
+  std::string text =
+      "camera c { pixeldim 4 3 worlddim 8 6 viewpoint 4 3 6 }\n"
+      "material glassy_mirror { ambient 1 1 1 diffuse 1 1 1 specular 1 transparency 1 }\n"
+      "light l { location 4 3 2 }\n";
+  for (int i = 1; i <= 10; ++i)
+    text += "plane p" + std::to_string(i) + " { material glassy_mirror normal 0 0 1 point 0 0 -" +
+            std::to_string(i) + " }\n";
+  return text;
+}
+
 inline Scene scene_from(const std::string& text) {
   LoadedScene loaded = load_scene(text);
   std::string errors;

@@ -158,6 +158,7 @@ std::vector<std::string> Features::parts() const {
   if (screen_bins) out.push_back("screen-bins");
   if (light_buffers) out.push_back("light-buffers");
   if (mirror_bins) out.push_back("mirror-bins");
+  if (byte_cutoff) out.push_back("byte-cutoff");
   return out;
 }
 
@@ -404,6 +405,23 @@ void build_ray_culling(PreparedScene<T>& p) {
   culling.finish();
 }
 
+// Whether a path's colour is a monotone function of each ray it has yet to follow, with values
+// under Tracer::value_bound: the weights of the fold (specular, keep = 1 - transparency,
+// filter) finite and not negative, and no transparency within 2^-8 of 1 unless it is 1.
+template <class T>
+bool bounded_weights(const Scene& scene, const PreparedScene<T>& p) {
+  for (std::size_t i = 0; i < p.materials.size(); ++i) {
+    const double tr = scene.materials[i].transparency;
+    if (!(tr == 0 || tr == 1 || (tr > 0 && tr <= 1 - 1.0 / 256))) return false;
+    const PreparedMaterial<T>& m = p.materials[i];
+    for (int c = 0; c < 3; ++c)
+      if (!(m.specular[c] >= 0 && std::isfinite(m.specular[c]) && m.filter[c] >= 0 &&
+            std::isfinite(m.filter[c])))
+        return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 template <class T>
@@ -424,6 +442,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   p.blinn = options.highlight == Highlight::blinn;
   p.spp = options.spp;
   p.seed = options.seed;
+  p.rounding = options.effective_rounding();
 
   for (const Material& m : scene.materials) {
     PreparedMaterial<T> pm{narrow<T>(m.ambient), narrow<T>(m.diffuse), narrow<T>(m.specular),
@@ -549,6 +568,8 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     f.bvh = !p.bvh.empty();
     if (p.shapes.size() >= kBvhMinShapes) build_shape_bvh(p);
     f.bvh = f.bvh || !p.shape_bvh.empty();
+    f.byte_cutoff =
+        (f.reflection || f.transparency) && options.spp == 1 && bounded_weights(scene, p);
   } else {
     f.lights = true;
     f.shadows = options.shadows;

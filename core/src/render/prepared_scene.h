@@ -29,6 +29,8 @@ struct Features {
   bool screen_bins = false;    // primary rays find their sphere by projection (screen_bins.h)
   bool light_buffers = false;  // shadow rays test the spheres of one direction cell (light_buffer.h)
   bool mirror_bins = false;  // reflection rays off planes from primary hits use mirror_bins.h
+  // One sample a pixel: a path stops once its pixel's byte is settled (Tracer::byte_settled).
+  bool byte_cutoff = false;
 
   std::vector<std::string> parts() const;
 };
@@ -100,6 +102,7 @@ struct PreparedScene {
   bool blinn = false;
   int spp = 1;
   std::uint64_t seed = 0;
+  Rounding rounding = Rounding::nearest;  // of the film the samples go to
 
   std::vector<PreparedMaterial<T>> materials;
   std::vector<PreparedSphere<T>> spheres;

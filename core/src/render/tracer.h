@@ -5,12 +5,14 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <vector>
 
+#include "render/film.h"
 #include "render/prepared_scene.h"
 #include "render/ray_counts.h"
 #include "render/recorder.h"
@@ -94,6 +96,20 @@ class Tracer {
   // From now on each traced path is written to `recorder` (cleared by the caller per
   // sample); null: none is.
   void record(Recorder* recorder) requires kRecord { rec_ = recorder; }
+
+  // For a pipeline whose samples each become their pixel's byte through `film` (one sample a
+  // pixel): from now on, where the scene allows it (Features::byte_cutoff), a path stops
+  // once its byte is settled (byte_settled), and the colour returned is one with that byte.
+  void stop_at_settled_bytes(const Film& film) requires(!kRecord) {
+    settle_ = s_.features.byte_cutoff;
+    film_ = film;
+    // With translucent objects, the heaviest of the rays still to follow goes first, so that
+    // the light ones are the last left and can be left out. Where no path can reach the
+    // budget of levels (its every level with two children down to max_depth), the order
+    // changes no level's value; elsewhere the budget makes it matter, and the order stays.
+    best_first_ = settle_ && s_.features.transparency && s_.max_depth < 14 &&
+                  (std::size_t{2} << s_.max_depth) <= kMaxBranchingLevels;
+  }
 
   // The unit direction from the eye through the world point `target` on the screen; none
   // when the two coincide (or the distance overflows).
@@ -438,13 +454,18 @@ class Tracer {
     return tile_parity(ix + iy) == T(0.5);
   }
 
+  // What a level's reflected or transmitted field holds when it names no level.
+  static constexpr int kNone = -1;      // no such ray
+  static constexpr int kPending = -2;   // a ray still to be followed
+  static constexpr int kLeftOut = -3;   // a ray left out once the byte was settled: adds 0
+
   struct Level {
     Vec3<T> local;   // clamped
     Vec3<T> weight;  // the material's specular: how much of the reflection is added
     T keep = 1;      // 1 - transparency: how much of the local colour stays
     Vec3<T> filter{0};
-    int reflected = -1;    // the level of the reflected ray's hit, if traced
-    int transmitted = -1;  // the level of the transmitted ray's hit, if traced
+    int reflected = kNone;    // the level of the reflected ray's hit, if traced
+    int transmitted = kNone;  // the level of the transmitted ray's hit, if traced
     Vec3<T> value{0};
   };
 
@@ -453,7 +474,9 @@ class Tracer {
     Origin from;
     T travelled, path_weight;
     int depth;
-    int parent;  // the level whose transmitted ray this is
+    int parent = kNone;        // the level this ray leaves
+    bool reflection = false;   // the parent's reflected ray; else its transmitted ray
+    const Hit<T>* known = nullptr;  // its closest hit, where that is known already
   };
 
   // `first`, when given, is the closest hit of the first ray; `bounce`, when given, that of
@@ -461,37 +484,65 @@ class Tracer {
   Vec3<T> trace(Vec3<T> origin, Vec3<T> dir, const Hit<T>* first, const Hit<T>* bounce = nullptr) {
     levels_.clear();
     pending_.clear();
-    follow(origin, dir, Origin{}, 0, 1, 0, -1, first, bounce);
+    settled_ = false;
+    follow({origin, dir, Origin{}, 0, 1, 0, kNone, false, first}, bounce);
     while (!pending_.empty()) {
-      const PendingRay r = pending_.back();
-      pending_.pop_back();
-      follow(r.origin, r.dir, r.from, r.travelled, r.path_weight, r.depth, r.parent, nullptr,
-             nullptr);
+      const PendingRay r = take_pending();
+      if (!settled_ && best_first_) {
+        T weight = r.path_weight;  // of everything still to follow
+        for (const PendingRay& q : pending_) weight += q.path_weight;
+        settle_now(weight);
+      }
+      if (settled_) {
+        (r.reflection ? levels_[r.parent].reflected : levels_[r.parent].transmitted) = kLeftOut;
+        continue;
+      }
+      follow(r, nullptr);
     }
-    // Children come after their parents: fold from the last level back.
+    // Children come after their parents: fold from the last level back (a ray left out
+    // adds 0, as in byte_settled's lower bound).
+    auto value = [&](int level) { return level >= 0 ? levels_[level].value : Vec3<T>(0); };
     for (size_t i = levels_.size(); i-- > 0;) {
       Level& l = levels_[i];
       Vec3<T> c = l.local;
-      if (l.transmitted >= 0) c = l.keep * c + l.filter * levels_[l.transmitted].value;
-      if (l.reflected >= 0) c = clamp01(c + l.weight * levels_[l.reflected].value);
+      if (l.transmitted != kNone) c = l.keep * c + l.filter * value(l.transmitted);
+      if (l.reflected != kNone) c = clamp01(c + l.weight * value(l.reflected));
       l.value = c;
     }
     if (recording()) record_levels();
     return levels_.front().value;
   }
 
-  // Follows one ray and its chain of reflections, adding a level per hit; a translucent hit
-  // queues its transmitted ray.
-  void follow(Vec3<T> origin, Vec3<T> dir, Origin from, T travelled, T path_weight, int depth,
-              int parent, const Hit<T>* first, const Hit<T>* bounce) {
-    int previous = -1;
-    for (;; ++depth) {
+  // The next pending ray: the last queued, or (best_first_) the one of the largest path
+  // weight, the last queued of equals.
+  PendingRay take_pending() {
+    std::size_t k = pending_.size() - 1;
+    if (best_first_)
+      for (std::size_t i = pending_.size() - 1; i-- > 0;)
+        if (pending_[i].path_weight > pending_[k].path_weight) k = i;
+    const PendingRay r = pending_[k];
+    pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(k));
+    return r;
+  }
+
+  // Follows ray r and, but in best-first order, its chain of reflections, adding a level per
+  // hit; a translucent hit queues its transmitted ray. `bounce`, when given, is the closest
+  // hit of the reflection ray r's hit sends.
+  void follow(const PendingRay& r, const Hit<T>* bounce) {
+    Vec3<T> origin = r.origin, dir = r.dir;
+    Origin from = r.from;
+    T travelled = r.travelled, path_weight = r.path_weight;
+    int depth = r.depth;
+    int previous = r.reflection ? r.parent : kNone;
+    const int parent = r.reflection ? kNone : r.parent;
+    for (int step = 0;; ++step, ++depth) {
       const int index = static_cast<int>(levels_.size());
       if (previous >= 0)
         levels_[previous].reflected = index;
       else if (parent >= 0)
         levels_[parent].transmitted = index;
-      const Hit<T>* known = previous < 0 ? first : index == 1 ? bounce : nullptr;
+      if (step > 0 || r.parent >= 0) ++counts.reflection;
+      const Hit<T>* known = step == 0 ? r.known : step == 1 ? bounce : nullptr;
       Hit<T> hit = known ? *known : closest(origin, dir, from, s_.max_dist - travelled);
       if (hit.object < 0) {
         if (recording())
@@ -518,21 +569,84 @@ class Tracer {
         levels_[index].keep = 1 - m.transparency;
         levels_[index].filter = m.filter;
         // Straight on through the surface: into the object it was outside of, and out again.
+        levels_[index].transmitted = kPending;
         pending_.push_back({p, dir, Origin{hit.object, !sf.inside}, r_total,
                             path_weight * m.transparency, depth + 1, index});
-        ++counts.reflection;
       }
       if (!reflects(m, depth, path_weight, budget)) return;
       levels_[index].weight = m.specular;
+      levels_[index].reflected = kPending;
+      const Vec3<T> out = reflected(dir, sf.n);
+      if (best_first_) {  // it waits its turn with the transmitted rays
+        pending_.push_back({p, out, {hit.object, sf.inside}, r_total,
+                            path_weight * m.max_specular, depth + 1, index, true,
+                            step == 0 ? bounce : nullptr});
+        return;
+      }
+      if (settle_ && settle_now(path_weight * m.max_specular)) {
+        levels_[index].reflected = kLeftOut;
+        return;
+      }
       path_weight *= m.max_specular;
-      dir = reflected(dir, sf.n);
+      dir = out;
       origin = p;
       travelled = r_total;
       from = {hit.object, sf.inside};
       previous = index;
-      ++counts.reflection;
     }
   }
+
+  // Whether the byte is settled now, with `weight` the sum of the path weights of the rays
+  // still to follow. Only asked where the rays left could not move the colour by a whole
+  // byte, and the bounds are not too long to fold.
+  bool settle_now(T weight) {
+    settled_ = weight < T(kSettleWeight) && levels_.size() <= kMaxSettledLevels &&
+               byte_settled();
+    return settled_;
+  }
+
+  // Whether the pixel's byte is the same whatever the rays still pending bring. Each adds a
+  // value in [0, value_bound()] (any level's value: see there), and each step of the fold in
+  // trace() is monotone in it: its weights (specular, keep, filter) are finite and not
+  // negative (Features::byte_cutoff), clamping is monotone, and so is every rounding. So the
+  // fold with all of them at 0 and with all of them at the bound brackets the colour the
+  // whole path would give, and the colour with the pending rays left out (at 0); where the
+  // two ends make one byte, so do those.
+  bool byte_settled() {
+    bounds_.resize(levels_.size());
+    const T top = value_bound();
+    auto low = [&](int level) { return level >= 0 ? bounds_[level][0] : Vec3<T>(0); };
+    auto high = [&](int level) {
+      return level >= 0 ? bounds_[level][1] : level == kPending ? Vec3<T>(top) : Vec3<T>(0);
+    };
+    for (size_t i = levels_.size(); i-- > 0;) {
+      const Level& l = levels_[i];
+      Vec3<T> lo = l.local, hi = l.local;
+      if (l.transmitted != kNone) {
+        lo = l.keep * lo + l.filter * low(l.transmitted);
+        hi = l.keep * hi + l.filter * high(l.transmitted);
+      }
+      if (l.reflected != kNone) {
+        lo = clamp01(lo + l.weight * low(l.reflected));
+        hi = clamp01(hi + l.weight * high(l.reflected));
+      }
+      bounds_[i] = {lo, hi};
+    }
+    const Vec3<T>& lo = bounds_.front()[0];
+    const Vec3<T>& hi = bounds_.front()[1];
+    for (int c = 0; c < 3; ++c)
+      if (film_.to_byte(static_cast<double>(lo[c])) != film_.to_byte(static_cast<double>(hi[c])))
+        return false;
+    return true;
+  }
+
+  // No level's value exceeds this. A level that reflects is clamped to [0, 1], and so are a
+  // local colour and the background; one that only lets light through is keep·local +
+  // filter·value, which stays under 1 + 2^-10 while no transparency lies within 2^-8 of 1
+  // without being 1 (Features::byte_cutoff): filter is at most transparency and keep is
+  // 1 - transparency, each to a few roundings, and their margin below the bound, about
+  // 2^-8 · 2^-10, is far above those roundings even in float.
+  T value_bound() const { return s_.features.transparency ? T(1) + T(1) / 1024 : T(1); }
 
   // Whether a hit on material m sends a reflection ray (follow() and primary_bounce()).
   bool reflects(const PreparedMaterial<T>& m, int depth, T path_weight, bool budget) const {
@@ -736,7 +850,17 @@ class Tracer {
     return true;
   }
 
+  // The bounds are folded afresh at every reflection: past this many levels (only a scene
+  // with translucent objects gets there) the path is followed to its end.
+  static constexpr std::size_t kMaxSettledLevels = 64;
+  static constexpr double kSettleWeight = 1.0 / 255;
+
   const PreparedScene<T>& s_;
+  bool settle_ = false;   // stop_at_settled_bytes
+  bool settled_ = false;  // this path's byte is settled: nothing more is followed
+  bool best_first_ = false;  // the pending rays are taken heaviest first
+  Film film_;
+  std::vector<std::array<Vec3<T>, 2>> bounds_;  // byte_settled's, per level
   std::vector<Level> levels_;
   std::vector<PendingRay> pending_;
   std::vector<int> blockers_;  // per light: the object that blocked its last shadow ray
