@@ -107,8 +107,8 @@ class Tracer {
     // the light ones are the last left and can be left out. Where no path can reach the
     // budget of levels (its every level with two children down to max_depth), the order
     // changes no level's value; elsewhere the budget makes it matter, and the order stays.
-    best_first_ = settle_ && s_.features.transparency && s_.max_depth < 14 &&
-                  (std::size_t{2} << s_.max_depth) <= kMaxBranchingLevels;
+    best_first_ = settle_ && s_.features.transparency && s_.max_depth >= 0 &&
+                  s_.max_depth < 14 && (std::size_t{2} << s_.max_depth) <= kMaxBranchingLevels;
   }
 
   // The unit direction from the eye through the world point `target` on the screen; none
@@ -488,7 +488,7 @@ class Tracer {
     follow(origin, dir, Origin{}, 0, 1, 0, kNone, kNone, first, bounce);
     while (!pending_.empty()) {
       const PendingRay r = take_pending();
-      if (!settled_ && best_first_) {
+      if (!settled_ && heaviest_first()) {
         T weight = r.path_weight;  // of everything still to follow
         for (const PendingRay& q : pending_) weight += q.path_weight;
         settle_now(weight);
@@ -514,16 +514,26 @@ class Tracer {
     return levels_.front().value;
   }
 
-  // The next pending ray: the last queued, or (best_first_) the one of the largest path
-  // weight, the last queued of equals.
+  // Queues a ray to follow later: last in, first out, or (best_first_) in a heap by path
+  // weight, while the path is short enough to settle; past that the order no longer helps,
+  // and the rest go last in, first out.
+  void queue(const PendingRay& r) {
+    pending_.push_back(r);
+    if (heaviest_first()) std::push_heap(pending_.begin(), pending_.end(), lighter);
+  }
+
+  // The next pending ray: the last queued, or (heaviest_first) one of the largest path weight.
   PendingRay take_pending() {
-    std::size_t k = pending_.size() - 1;
-    if (best_first_)
-      for (std::size_t i = pending_.size() - 1; i-- > 0;)
-        if (pending_[i].path_weight > pending_[k].path_weight) k = i;
-    const PendingRay r = pending_[k];
-    pending_.erase(pending_.begin() + static_cast<std::ptrdiff_t>(k));
+    if (heaviest_first()) std::pop_heap(pending_.begin(), pending_.end(), lighter);
+    const PendingRay r = pending_.back();
+    pending_.pop_back();
     return r;
+  }
+
+  bool heaviest_first() const { return best_first_ && levels_.size() <= kMaxSettledLevels; }
+
+  static bool lighter(const PendingRay& a, const PendingRay& b) {
+    return a.path_weight < b.path_weight;
   }
 
   // Follows one ray and, but in best-first order, its chain of reflections, adding a level
@@ -570,17 +580,16 @@ class Tracer {
         levels_[index].filter = m.filter;
         // Straight on through the surface: into the object it was outside of, and out again.
         levels_[index].transmitted = kPending;
-        pending_.push_back({p, dir, Origin{hit.object, !sf.inside}, r_total,
-                            path_weight * m.transparency, depth + 1, index});
+        queue({p, dir, Origin{hit.object, !sf.inside}, r_total, path_weight * m.transparency,
+               depth + 1, index});
       }
       if (!reflects(m, depth, path_weight, budget)) return;
       levels_[index].weight = m.specular;
       levels_[index].reflected = kPending;
       const Vec3<T> out = reflected(dir, sf.n);
       if (best_first_) {  // it waits its turn with the transmitted rays
-        pending_.push_back({p, out, {hit.object, sf.inside}, r_total,
-                            path_weight * m.max_specular, depth + 1, index, true,
-                            step == 0 ? bounce : nullptr});
+        queue({p, out, {hit.object, sf.inside}, r_total, path_weight * m.max_specular,
+               depth + 1, index, true, step == 0 ? bounce : nullptr});
         return;
       }
       if (settle_ && settle_now(path_weight * m.max_specular)) {
