@@ -54,6 +54,29 @@ std::string glass(const std::string& tr) {
          "sphere { material gold center 6 .8 -4 radius .8 }\n";
 }
 
+// glass(tr) with a row of small balls on a floor that lets light through too: enough spheres
+// for the hierarchy and for mirror bins, which hand the reflection of a primary ray's hit on a
+// plane its closest hit (and not the ray that goes on through the floor).
+std::string glass_and_balls(const std::string& tr) {
+  std::string text = glass(tr);
+  const std::string floor = "material floor { ambient 1.5 diffuse .8 specular .2";
+  text.replace(text.find(floor), floor.size(), floor + " transparency .3");
+  for (int i = 0; i < 10; ++i)
+    text += "sphere { material " + std::string(i % 2 ? "gold" : "glass") + " center " +
+            std::to_string(0.5 + 0.8 * i) + " .3 " + std::to_string(-2.5 - 0.4 * i) +
+            " radius .3 }\n";
+  return text;
+}
+
+// A stack of ten parallel planes of one material.
+std::string stack(const std::string& material) {
+  std::string text = "camera c { pixeldim 4 3 worlddim 8 6 viewpoint 4 3 6 }\n"
+                     "material m { " + material + " }\nlight l { location 4 3 2 }\n";
+  for (int i = 1; i <= 10; ++i)
+    text += "plane { material m normal 0 0 1 point 0 0 -" + std::to_string(i) + " }\n";
+  return text;
+}
+
 struct Traced {
   int differ = 0;     // pixels whose bytes differ from the whole path's
   RayCounts whole, cut;
@@ -126,6 +149,14 @@ TEST(ByteCutoff, TranslucentPathsTakenHeaviestFirstKeepTheirBytes) {
     SCOPED_TRACE(tr);
     expect_exact_and_fewer(scene_from(glass(tr)), RenderOptions{}, true);
   }
+  // The first bounce's closest hit from the mirror bins goes with that bounce, whenever it is
+  // taken.
+  const Scene balls = scene_from(glass_and_balls("0.6"));
+  RenderStats stats;
+  render(balls, RenderOptions{}, 1, &stats);
+  for (const char* part : {"bvh", "mirror-bins", "transparency", "byte-cutoff"})
+    EXPECT_NE(std::find(stats.parts.begin(), stats.parts.end(), part), stats.parts.end()) << part;
+  expect_exact_and_fewer(balls, RenderOptions{}, true);
 }
 
 TEST(ByteCutoff, PathsThroughTranslucentObjectsThatDoNotReflectStopToo) {
@@ -157,6 +188,11 @@ TEST(ByteCutoff, DeepBranchingPathsKeepTheirBytesWhetherTheBudgetCanBindOrNot) {
   // then (past what the bounds fold) last in, first out, thousands of them a pixel.
   o.max_depth = 12;
   expect_exact_and_fewer(scene_from(test::translucent_mirror_stack()), o, false);
+  // Reflected and transmitted rays of unequal weights, where the budget binds: taken heaviest
+  // first, other rays would meet the budget than in the plain order.
+  o.max_depth = 20;
+  expect_exact_and_fewer(
+      scene_from(stack("ambient 1 diffuse .5 .7 .9 specular .9 transparency .5")), o, false);
 }
 
 TEST(ByteCutoff, OnlyWhereEachSampleIsItsPixelsByteAndTheBoundsHold) {
@@ -179,6 +215,12 @@ TEST(ByteCutoff, OnlyWhereEachSampleIsItsPixelsByteAndTheBoundsHold) {
   // A transparency just short of 1: keep·local + filter·value could round above the bound.
   EXPECT_FALSE(has_cutoff(scene_from(glass("0.999")), RenderOptions{}));
   EXPECT_TRUE(has_cutoff(scene_from(glass("0.99")), RenderOptions{}));
+  // A subnormal diffuse: transparency · diffuse rounds up to all of it, a filter of 1 beside a
+  // keep of 0.4, and a level that only lets light through could pass the bound.
+  EXPECT_FALSE(has_cutoff(
+      scene_from(stack("ambient 100 diffuse 5e-324 specular .003 transparency .6")), {}));
+  EXPECT_TRUE(has_cutoff(
+      scene_from(stack("ambient 100 diffuse 1e-300 specular .003 transparency .6")), {}));
 }
 
 }  // namespace

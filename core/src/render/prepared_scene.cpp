@@ -407,16 +407,20 @@ void build_ray_culling(PreparedScene<T>& p) {
 
 // Whether a path's colour is a monotone function of each ray it has yet to follow, with values
 // under Tracer::value_bound: the weights of the fold (specular, keep = 1 - transparency,
-// filter) finite and not negative, and no transparency within 2^-8 of 1 unless it is 1.
+// filter) finite and not negative, no transparency within 2^-8 of 1 unless it is 1, and no
+// filter above its transparency but by rounding (at most 1 where that is 1). The last fails
+// only where a diffuse colour is subnormal: transparency · diffuse then rounds to a far larger
+// share of it (0.6 · 2^-1074 is 2^-1074, a filter of 1 beside a keep of 0.4).
 template <class T>
 bool bounded_weights(const Scene& scene, const PreparedScene<T>& p) {
   for (std::size_t i = 0; i < p.materials.size(); ++i) {
     const double tr = scene.materials[i].transparency;
     if (!(tr == 0 || tr == 1 || (tr > 0 && tr <= 1 - 1.0 / 256))) return false;
+    const double most_filter = tr == 1 ? 1.0 : tr * (1 + 1.0 / (1 << 20));
     const PreparedMaterial<T>& m = p.materials[i];
     for (int c = 0; c < 3; ++c)
       if (!(m.specular[c] >= 0 && std::isfinite(m.specular[c]) && m.filter[c] >= 0 &&
-            std::isfinite(m.filter[c])))
+            static_cast<double>(m.filter[c]) <= most_filter))
         return false;
   }
   return true;
@@ -569,7 +573,8 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     if (p.shapes.size() >= kBvhMinShapes) build_shape_bvh(p);
     f.bvh = f.bvh || !p.shape_bvh.empty();
     f.byte_cutoff =
-        (f.reflection || f.transparency) && options.spp == 1 && bounded_weights(scene, p);
+        (f.reflection || (f.transparency && p.max_depth > 0)) && options.spp == 1 &&
+        bounded_weights(scene, p);
   } else {
     f.lights = true;
     f.shadows = options.shadows;

@@ -652,9 +652,10 @@ class Tracer {
   // No level's value exceeds this. A level that reflects is clamped to [0, 1], and so are a
   // local colour and the background; one that only lets light through is keep·local +
   // filter·value, which stays under 1 + 2^-10 while no transparency lies within 2^-8 of 1
-  // without being 1 (Features::byte_cutoff): filter is at most transparency and keep is
-  // 1 - transparency, each to a few roundings, and their margin below the bound, about
-  // 2^-8 · 2^-10, is far above those roundings even in float.
+  // without being 1 (Features::byte_cutoff): filter is at most transparency (checked, to
+  // 2^-20 of it) and keep is 1 - transparency to a rounding, and their margin below the
+  // bound, about 2^-8 · 2^-10, is far above those errors even in float. At transparency 1,
+  // keep is 0 and filter at most 1.
   T value_bound() const { return s_.features.transparency ? T(1) + T(1) / 1024 : T(1); }
 
   // Whether a hit on material m sends a reflection ray (follow() and primary_bounce()).
