@@ -860,9 +860,11 @@ class Tracer {
     return true;
   }
 
-  // The bounds are folded afresh at every reflection: past this many levels (only a scene
-  // with translucent objects gets there) the path is followed to its end.
+  // The bounds are folded afresh each time they are asked: past this many levels (a chain
+  // deeper than 63 bounces, or a translucent scene's tree) the path is followed to its end.
   static constexpr std::size_t kMaxSettledLevels = 64;
+  // They are asked only once the rays left weigh less than a byte in all: above that, only a
+  // saturated colour could settle the byte (none did in the benchmark scenes).
   static constexpr double kSettleWeight = 1.0 / 255;
 
   const PreparedScene<T>& s_;
