@@ -33,8 +33,9 @@ class LecturePipeline {
                    RayCounts& counts, double& /*error*/, Canceled&& canceled) const {
     out.resize(static_cast<size_t>(b.width()) * b.rows());
     Tracer<T> tracer(s_);
-    // Each sample is its pixel's byte (TiledRender, one pass): paths stop once that is settled.
-    if (s_.spp == 1) tracer.stop_at_settled_bytes(Film{s_.rounding});
+    // Where each sample is its pixel's byte (Features::byte_cutoff: one pass of TiledRender),
+    // paths stop once that is settled.
+    tracer.stop_at_settled_bytes(Film{s_.rounding});
     const bool binned = !s_.screen_bins.empty() || !s_.mirror_bins.empty();
     // Kept by each render thread from tile to tile. Made anew, these buffers (the bounces
     // growing a dozen times) took malloc's lock some ten times a tile, which the render

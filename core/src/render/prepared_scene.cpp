@@ -572,9 +572,8 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     f.bvh = !p.bvh.empty();
     if (p.shapes.size() >= kBvhMinShapes) build_shape_bvh(p);
     f.bvh = f.bvh || !p.shape_bvh.empty();
-    f.byte_cutoff =
-        (f.reflection || (f.transparency && p.max_depth > 0)) && options.spp == 1 &&
-        bounded_weights(scene, p);
+    f.byte_cutoff = (f.reflection || f.transparency) && p.max_depth > 0 && options.spp == 1 &&
+                    bounded_weights(scene, p);
   } else {
     f.lights = true;
     f.shadows = options.shadows;
