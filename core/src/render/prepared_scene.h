@@ -2,6 +2,8 @@
 // camera, and the list of pipeline parts this scene and these options need.
 #pragma once
 
+#include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -45,6 +47,12 @@ struct PreparedMaterial {
   bool lit = true;  // lights can add anything: some diffuse, or a highlight
   T transparency = 0;
   Vec3<T> filter{0};  // transparency · diffuse / max(diffuse): what it lets through
+  // For Tracer::highlight_negligible: whether specular · pow(base, shininess) is bounded there
+  // (shininess > 0 and finite, every specular channel finite), and per channel the power of
+  // two E with |specular| < 2^E (kZeroSpecular for a channel of 0).
+  bool highlight_bounded = false;
+  std::array<int, 3> specular_exp{};
+  static constexpr int kZeroSpecular = std::numeric_limits<int>::min();
 };
 
 template <class T>

@@ -54,6 +54,46 @@ template <class T>
   return roots->near > 0 ? roots->near : roots->far;
 }
 
+// floor(log2 |x|) for a normal x; kNotNormal for 0, a subnormal, an infinity or a NaN.
+inline constexpr int kNotNormal = std::numeric_limits<int>::max();
+template <class T>
+inline int binary_exponent(T x) {
+  if constexpr (sizeof(T) == 8) {
+    const int e = static_cast<int>(__builtin_bit_cast(std::uint64_t, x) >> 52 & 0x7ff);
+    return e == 0 || e == 0x7ff ? kNotNormal : e - 1023;
+  } else {
+    static_assert(sizeof(T) == 4);
+    const int e = static_cast<int>(__builtin_bit_cast(std::uint32_t, x) >> 23 & 0xff);
+    return e == 0 || e == 0xff ? kNotNormal : e - 127;
+  }
+}
+
+// Whether adding m.specular · pow(b, m.shininess) to `term` (b >= 0) would certainly leave
+// every channel as it is, so the power need not be computed: at shininess 64, most of a
+// highlight's lobe adds less than a rounding. pow(0, s) is 0 for s > 0. For b > 0, b < 2^(g+1)
+// with g its binary exponent, so b^s < 2^((g+1) s) < 2^k for the whole k below, and the
+// library's power, within an ulp of b^s, is at most 2^k (at least the smallest subnormal).
+// Times |specular| < 2^E that is at most 2^(E+k); where that is at most a quarter of an ulp
+// of a channel, the rounded sum is the channel again.
+template <class T>
+inline bool highlight_negligible(const PreparedMaterial<T>& m, T b, const Vec3<T>& term) {
+  if (!m.highlight_bounded) return false;
+  if (!(b > 0)) return true;
+  constexpr int kDigits = std::numeric_limits<T>::digits;
+  constexpr int kSubnormal = std::numeric_limits<T>::min_exponent - kDigits;  // 2^this: the least
+  const int g = binary_exponent(b);
+  if (g == kNotNormal || g >= 0) return false;
+  const T q = T(g + 1) * m.shininess;  // <= 0, and k > (g+1) s whatever q's rounding
+  const int k = q < T(kSubnormal) ? kSubnormal : static_cast<int>(q) + 1;
+  for (int c = 0; c < 3; ++c) {
+    if (m.specular_exp[c] == PreparedMaterial<T>::kZeroSpecular) continue;  // adds ±0
+    const int t = binary_exponent(term[c]);  // a quarter ulp of term[c] is 2^(t - digits - 1)
+    if (t == kNotNormal || t - kDigits - 1 < kSubnormal || m.specular_exp[c] + k > t - kDigits - 1)
+      return false;
+  }
+  return true;
+}
+
 // Distance to a plane ahead of the ray, or -1 (plane_ahead_t, shapes.h).
 template <class T>
 [[gnu::always_inline]] inline T plane_t(const Vec3<T>& o, const Vec3<T>& d,
@@ -749,7 +789,8 @@ class Tracer {
           Vec3<T> rl = (2 * n_dot_l) * n - l;
           base = glm::dot(rl, v);
         }
-        term += m.specular * std::pow(base > 0 ? base : T(0), m.shininess);
+        const T b = base > 0 ? base : T(0);
+        if (!highlight_negligible(m, b, term)) term += m.specular * std::pow(b, m.shininess);
         if (lr) {
           lr->highlight_base = static_cast<double>(base);
           lr->specular = triple(e * (m.specular * std::pow(base > 0 ? base : T(0), m.shininess)));
