@@ -48,6 +48,7 @@ void expect_left_out_only_where_nothing_changes() {
     T b = rng.chance(0.1) ? T(0) : magnitude(rng.chance(0.5) ? -3 : -200);
     Vec3<T> term;
     for (int c = 0; c < 3; ++c) term[c] = magnitude(rng.chance(0.8) ? -4 : -1100);
+    if (rng.chance(0.05)) term[rng.below(3)] = -T(0);  // a diffuse of -0 is valid
     if (rng.chance(0.3)) {
       // At the edge of the bound: a base just under a power of two, a whole shininess, and a
       // specular just under the largest power of two the bound lets through for a term in
@@ -90,9 +91,58 @@ TEST(HighlightNegligible, NeverWhereTheBoundDoesNotHold) {
   EXPECT_FALSE(highlight_negligible(material<double>(Vec3<double>(0.3), 64.0), 1e-3,
                                     Vec3<double>(0.5, 0, 0.5)));
   EXPECT_FALSE(highlight_negligible(material<double>(Vec3<double>(0.3), 16.0), 0.5, term));
+  // Bases of 1 and above (a dot product of unit vectors rounds up to them).
+  EXPECT_FALSE(highlight_negligible(material<double>(Vec3<double>(0.3), 64.0), 1.0, term));
+  EXPECT_FALSE(highlight_negligible(material<double>(Vec3<double>(0.3), 64.0),
+                                    std::nextafter(1.0, 2.0), term));
+  // A channel of -0 turns +0 with +0 added: not left out, whether the base is 0 or the
+  // channel's specular is.
+  const Vec3<double> minus_zero(0.5, -0.0, 0.5);
+  EXPECT_FALSE(highlight_negligible(material<double>(Vec3<double>(0.3), 64.0), 0.0, minus_zero));
+  EXPECT_FALSE(highlight_negligible(material<double>(Vec3<double>(0.3, 0, 0.3), 64.0), 1e-3,
+                                    minus_zero));
   // And the cases that are left out: a base of 0, and a small one at a high shininess.
   EXPECT_TRUE(highlight_negligible(material<double>(Vec3<double>(0.3), 64.0), 0.0, term));
   EXPECT_TRUE(highlight_negligible(material<double>(Vec3<double>(0.3), 128.0), 0.4, term));
+}
+
+// The bound's own edge, pinned: one power of two of specular more and the answer is no.
+template <class T>
+void expect_edge(T b, T shininess, T term, T specular_in, T specular_out) {
+  const Vec3<T> t(term);
+  const PreparedMaterial<T> in = material(Vec3<T>(specular_in), shininess);
+  ASSERT_TRUE(highlight_negligible(in, b, t));
+  const Vec3<T> sum = t + in.specular * std::pow(b, shininess);
+  EXPECT_EQ(__builtin_memcmp(&sum, &t, sizeof sum), 0);
+  EXPECT_FALSE(highlight_negligible(material(Vec3<T>(specular_out), shininess), b, t));
+}
+
+TEST(HighlightNegligible, TheEdgeOfTheBoundIsWhereTheProofPutsIt) {
+  // b = 1/4, s = 10: the power is 2^-20 and bounded by 2^-9; a term of 1 admits 2^(E-9)
+  // up to a quarter ulp, 2^-54 (2^-25 in float).
+  expect_edge<double>(0.25, 10, 1, 0x1p-46, 0x1p-45);
+  expect_edge<float>(0.25f, 10, 1, 0x1p-17f, 0x1p-16f);
+  // Where the power underflows to the least subnormal (the bound's floor, which the library's
+  // power reaches here), only a huge specular brings the product back to a quarter ulp of
+  // 1 + ulp: the largest specular below 2^1020 is left out, 2^1020 is not.
+  expect_edge<double>(0x1.fffffffffffffp-2, 1074.25, 1 + 0x1p-52,
+                      std::nextafter(0x1p1020, 0.0), 0x1p1020);
+  expect_edge<float>(0x1.fffffep-2f, 149.25f, 1 + 0x1p-23f, std::nextafter(0x1p124f, 0.0f),
+                     0x1p124f);
+  // Shininess at the extremes: the power is 0 (or the least subnormal) or all but 1.
+  for (double s : {1e300, std::numeric_limits<double>::max(), 5e-324, 1e-300}) {
+    SCOPED_TRACE(s);
+    const Vec3<double> t(0.75);
+    const PreparedMaterial<double> m = material(Vec3<double>(0.5), s);
+    if (highlight_negligible(m, 0.25, t)) {
+      const Vec3<double> sum = t + m.specular * std::pow(0.25, s);
+      EXPECT_EQ(__builtin_memcmp(&sum, &t, sizeof sum), 0);
+    }
+  }
+  EXPECT_TRUE(highlight_negligible(material(Vec3<double>(0.5), 1e300), 0.25, Vec3<double>(0.75)));
+  EXPECT_FALSE(highlight_negligible(material(Vec3<double>(0.5), 5e-324), 0.25, Vec3<double>(0.75)));
+  EXPECT_TRUE(highlight_negligible(material(Vec3<float>(0.5f), std::numeric_limits<float>::max()),
+                                   0.25f, Vec3<float>(0.75f)));
 }
 
 }  // namespace

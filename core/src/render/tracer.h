@@ -74,11 +74,13 @@ inline int binary_exponent(T x) {
 // with g its binary exponent, so b^s < 2^((g+1) s) < 2^k for the whole k below, and the
 // library's power, within an ulp of b^s, is at most 2^k (at least the smallest subnormal).
 // Times |specular| < 2^E that is at most 2^(E+k); where that is at most a quarter of an ulp
-// of a channel, the rounded sum is the channel again.
+// of a channel, the rounded sum is the channel again. A channel of -0 (a diffuse of -0 is
+// valid) would turn +0 with anything added, +0 too: such a term is left to the sum.
 template <class T>
 inline bool highlight_negligible(const PreparedMaterial<T>& m, T b, const Vec3<T>& term) {
   if (!m.highlight_bounded) return false;
-  if (!(b > 0)) return true;
+  auto minus_zero = [&](int c) { return term[c] == 0 && std::signbit(term[c]); };
+  if (!(b > 0)) return !(minus_zero(0) || minus_zero(1) || minus_zero(2));
   constexpr int kDigits = std::numeric_limits<T>::digits;
   constexpr int kSubnormal = std::numeric_limits<T>::min_exponent - kDigits;  // 2^this: the least
   const int g = binary_exponent(b);
@@ -86,7 +88,10 @@ inline bool highlight_negligible(const PreparedMaterial<T>& m, T b, const Vec3<T
   const T q = T(g + 1) * m.shininess;  // <= 0, and k > (g+1) s whatever q's rounding
   const int k = q < T(kSubnormal) ? kSubnormal : static_cast<int>(q) + 1;
   for (int c = 0; c < 3; ++c) {
-    if (m.specular_exp[c] == PreparedMaterial<T>::kZeroSpecular) continue;  // adds ±0
+    if (m.specular_exp[c] == PreparedMaterial<T>::kZeroSpecular) {  // adds ±0
+      if (minus_zero(c)) return false;
+      continue;
+    }
     const int t = binary_exponent(term[c]);  // a quarter ulp of term[c] is 2^(t - digits - 1)
     if (t == kNotNormal || t - kDigits - 1 < kSubnormal || m.specular_exp[c] + k > t - kDigits - 1)
       return false;
