@@ -19,13 +19,7 @@ PreparedMaterial<T> material(const Vec3<T>& specular, T shininess) {
   PreparedMaterial<T> m{};
   m.specular = specular;
   m.shininess = shininess;
-  m.highlight_bounded = shininess > 0 && std::isfinite(shininess);
-  for (int c = 0; c < 3; ++c) {
-    m.highlight_bounded = m.highlight_bounded && std::isfinite(specular[c]);
-    int e = 0;
-    std::frexp(specular[c], &e);
-    m.specular_exp[c] = specular[c] == 0 ? PreparedMaterial<T>::kZeroSpecular : e;
-  }
+  bound_highlight(m);  // as prepare_scene does
   return m;
 }
 

@@ -454,13 +454,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
                            narrow<T>(std::max({m.specular.x, m.specular.y, m.specular.z})),
                            nonzero(m.specular), nonzero(m.specular)};
     pm.transparency = narrow<T>(m.transparency);
-    pm.highlight_bounded = pm.shininess > 0 && std::isfinite(pm.shininess);
-    for (int c = 0; c < 3; ++c) {
-      pm.highlight_bounded = pm.highlight_bounded && std::isfinite(pm.specular[c]);
-      int e = 0;
-      std::frexp(pm.specular[c], &e);  // |specular| = f 2^e, 1/2 <= f < 1
-      pm.specular_exp[c] = pm.specular[c] == 0 ? PreparedMaterial<T>::kZeroSpecular : e;
-    }
+    bound_highlight(pm);
     const double most = std::max({m.diffuse.x, m.diffuse.y, m.diffuse.z});
     if (most > 0) pm.filter = narrow<T>(m.transparency * m.diffuse / most);
     p.materials.push_back(pm);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
@@ -47,13 +48,26 @@ struct PreparedMaterial {
   bool lit = true;  // lights can add anything: some diffuse, or a highlight
   T transparency = 0;
   Vec3<T> filter{0};  // transparency · diffuse / max(diffuse): what it lets through
-  // For Tracer::highlight_negligible: whether specular · pow(base, shininess) is bounded there
-  // (shininess > 0 and finite, every specular channel finite), and per channel the power of
-  // two E with |specular| < 2^E (kZeroSpecular for a channel of 0).
+  // For highlight_negligible (tracer.h), set by bound_highlight: whether specular ·
+  // pow(base, shininess) is bounded there (shininess > 0 and finite, every specular channel
+  // finite), and per channel the power of two E with |specular| < 2^E (kZeroSpecular for a
+  // channel of 0).
   bool highlight_bounded = false;
   std::array<int, 3> specular_exp{};
   static constexpr int kZeroSpecular = std::numeric_limits<int>::min();
 };
+
+// Sets m's highlight_bounded and specular_exp from its specular and shininess.
+template <class T>
+void bound_highlight(PreparedMaterial<T>& m) {
+  m.highlight_bounded = m.shininess > 0 && std::isfinite(m.shininess);
+  for (int c = 0; c < 3; ++c) {
+    m.highlight_bounded = m.highlight_bounded && std::isfinite(m.specular[c]);
+    int e = 0;
+    std::frexp(m.specular[c], &e);  // |specular| = f 2^e, 1/2 <= f < 1
+    m.specular_exp[c] = m.specular[c] == 0 ? PreparedMaterial<T>::kZeroSpecular : e;
+  }
+}
 
 template <class T>
 struct PreparedSphere {
