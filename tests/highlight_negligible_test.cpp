@@ -34,10 +34,12 @@ void expect_left_out_only_where_nothing_changes() {
   };
   int left_out = 0, positive = 0, cases = 0;
   for (int i = 0; i < 400000; ++i) {
-    const T shininess = rng.chance(0.5) ? static_cast<T>(16 << rng.below(4))  // 16..128
-                                        : static_cast<T>(std::exp(rng.in(std::log(0.5), std::log(1e4))));
+    const T shininess = rng.chance(0.5)
+                            ? static_cast<T>(16 << rng.below(4))  // 16..128
+                            : static_cast<T>(std::exp(rng.in(std::log(0.5), std::log(1e4))));
     Vec3<T> specular;
-    for (int c = 0; c < 3; ++c) specular[c] = rng.chance(0.2) ? T(0) : magnitude(-40) * T(rng.in(0, 4));
+    for (int c = 0; c < 3; ++c)
+      specular[c] = rng.chance(0.2) ? T(0) : magnitude(-40) * T(rng.in(0, 4));
     PreparedMaterial<T> m = material(specular, shininess);
     T b = rng.chance(0.1) ? T(0) : magnitude(rng.chance(0.5) ? -3 : -200);
     Vec3<T> term;
@@ -46,7 +48,7 @@ void expect_left_out_only_where_nothing_changes() {
     if (rng.chance(0.3)) {
       // At the edge of the bound: a base just under a power of two, a whole shininess, and a
       // specular just under the largest power of two the bound lets through for a term in
-      // [2^t, 2^(t+1)): the highlight then adds about an eighth of the term's ulp.
+      // [2^t, 2^(t+1)): the highlight then adds about a sixteenth of the term's ulp.
       const int g1 = -1 - rng.below(6), s = 1 + rng.below(40), t = -rng.below(8);
       b = std::nextafter(static_cast<T>(std::ldexp(1.0, g1)), T(0));
       const int e = t - std::numeric_limits<T>::digits - 2 - (g1 * s + 1);
@@ -93,8 +95,8 @@ TEST(HighlightNegligible, NeverWhereTheBoundDoesNotHold) {
   // channel's specular is.
   const Vec3<double> minus_zero(0.5, -0.0, 0.5);
   EXPECT_FALSE(highlight_negligible(material<double>(Vec3<double>(0.3), 64.0), 0.0, minus_zero));
-  EXPECT_FALSE(highlight_negligible(material<double>(Vec3<double>(0.3, 0, 0.3), 64.0), 1e-3,
-                                    minus_zero));
+  EXPECT_FALSE(
+      highlight_negligible(material<double>(Vec3<double>(0.3, 0, 0.3), 64.0), 1e-3, minus_zero));
   // And the cases that are left out: a base of 0, and a small one at a high shininess.
   EXPECT_TRUE(highlight_negligible(material<double>(Vec3<double>(0.3), 64.0), 0.0, term));
   EXPECT_TRUE(highlight_negligible(material<double>(Vec3<double>(0.3), 128.0), 0.4, term));
@@ -119,8 +121,8 @@ TEST(HighlightNegligible, TheEdgeOfTheBoundIsWhereTheProofPutsIt) {
   // Where the power underflows to the least subnormal (the bound's floor, which the library's
   // power reaches here), only a huge specular brings the product back to a quarter ulp of
   // 1 + ulp: the largest specular below 2^1020 is left out, 2^1020 is not.
-  expect_edge<double>(0x1.fffffffffffffp-2, 1074.25, 1 + 0x1p-52,
-                      std::nextafter(0x1p1020, 0.0), 0x1p1020);
+  expect_edge<double>(0x1.fffffffffffffp-2, 1074.25, 1 + 0x1p-52, std::nextafter(0x1p1020, 0.0),
+                      0x1p1020);
   expect_edge<float>(0x1.fffffep-2f, 149.25f, 1 + 0x1p-23f, std::nextafter(0x1p124f, 0.0f),
                      0x1p124f);
   // Shininess at the extremes: the power is 0 (or the least subnormal) or all but 1.

@@ -70,12 +70,13 @@ inline int binary_exponent(T x) {
 
 // Whether adding m.specular · pow(b, m.shininess) to `term` (b >= 0) would certainly leave
 // every channel as it is, so the power need not be computed: at shininess 64, any base
-// below 1/2 adds less than a rounding to a term near 1. pow(0, s) is 0 for s > 0. For b > 0, b < 2^(g+1)
-// with g its binary exponent, so b^s < 2^((g+1) s) < 2^k for the whole k below, and the
-// library's power, within an ulp of b^s, is at most 2^k (at least the smallest subnormal).
-// Times |specular| < 2^E that is at most 2^(E+k); where that is at most a quarter of an ulp
-// of a channel, the rounded sum is the channel again. A channel of -0 (a diffuse of -0 is
-// valid) would turn +0 with anything added, +0 too: such a term is left to the sum.
+// below 1/2 adds less than a rounding to a term near 1. pow(0, s) is 0 for s > 0. For
+// b > 0, b < 2^(g+1) with g its binary exponent, so b^s < 2^((g+1) s) < 2^k for the whole k
+// below, and the library's power, within an ulp of b^s, is at most 2^k (at least the
+// smallest subnormal). Times |specular| < 2^E that is at most 2^(E+k); where that is at most
+// a quarter of an ulp of a channel, the rounded sum is the channel again. A channel of -0 (a
+// diffuse of -0 is valid) would turn +0 with anything added, +0 too: such a term is left to
+// the sum.
 template <class T>
 inline bool highlight_negligible(const PreparedMaterial<T>& m, T b, const Vec3<T>& term) {
   if (!m.highlight_bounded) return false;
