@@ -580,7 +580,11 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     f.shadows = options.shadows;
     f.highlight = true;
     f.reflection = true;
-    for (auto& m : p.materials) m.reflects = m.highlights = true;
+    // Every highlight computed in full too: the specialized renders are compared with these.
+    for (auto& m : p.materials) {
+      m.reflects = m.highlights = true;
+      m.highlight_bounded = false;
+    }
   }
   f.supersampling = options.spp > 1;
   return p;
