@@ -799,7 +799,7 @@ class Tracer {
         if (!highlight_negligible(m, b, term)) term += m.specular * std::pow(b, m.shininess);
         if (lr) {
           lr->highlight_base = static_cast<double>(base);
-          lr->specular = triple(e * (m.specular * std::pow(base > 0 ? base : T(0), m.shininess)));
+          lr->specular = triple(e * (m.specular * std::pow(b, m.shininess)));
         }
       }
       colour += e * term;
