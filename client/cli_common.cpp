@@ -7,18 +7,43 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
-#include <sstream>
 #include <unistd.h>
 
 namespace rayfarm::cli {
 
 std::string display_name(const std::string& path) { return path == "-" ? "<stdin>" : path; }
 
-std::optional<std::string> read_input(const std::string& path) {
+namespace {
+
+// "larger than 1 GiB, the most rayfarm reads from one input"
+std::string too_large(std::uintmax_t limit) {
+  const bool gib = limit % (std::uintmax_t{1} << 30) == 0;
+  return "larger than " + std::to_string(gib ? limit >> 30 : limit >> 20) +
+         (gib ? " GiB" : " MiB") + ", the most rayfarm reads from one input";
+}
+
+// Reads what is left of `in` onto `text`, at most `limit` bytes in all; false past that.
+bool read_rest(std::istream& in, std::string& text, std::uintmax_t limit) {
+  char buf[65536];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    const auto n = static_cast<std::size_t>(in.gcount());
+    if (text.size() + n > limit) return false;
+    text.append(buf, n);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<std::string> read_input(const std::string& path, std::uintmax_t limit) {
+  std::string text;
+  auto refuse = [&] {
+    std::cerr << "rayfarm: " << display_name(path) << ": " << too_large(limit) << "\n";
+    return std::nullopt;
+  };
   if (path == "-") {
-    std::ostringstream s;
-    s << std::cin.rdbuf();
-    return s.str();
+    if (!read_rest(std::cin, text, limit)) return refuse();
+    return text;
   }
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
@@ -31,18 +56,17 @@ std::optional<std::string> read_input(const std::string& path) {
     return std::nullopt;
   }
   // One read of the file's size, then whatever is left (a file that grew, or one whose size
-  // the system does not know, such as a pipe).
-  std::string text;
+  // the system does not know, such as a pipe or a device).
   std::error_code size_ec;
   auto size = std::filesystem::file_size(path, size_ec);
+  if (!size_ec && size > limit) return refuse();
   if (!size_ec && size > 0) {
     text.resize(static_cast<size_t>(size));
     in.read(text.data(), static_cast<std::streamsize>(text.size()));
     text.resize(static_cast<size_t>(in.gcount()));
     if (!in) return text;  // end of file before the size (it shrank)
   }
-  char buf[65536];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) text.append(buf, static_cast<size_t>(in.gcount()));
+  if (!read_rest(in, text, limit)) return refuse();
   return text;
 }
 
@@ -150,9 +174,12 @@ std::optional<std::string> FileResolver::read(const std::string& path, std::stri
     error = file.string() + ": " + std::strerror(errno);
     return std::nullopt;
   }
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  return bytes.str();
+  std::string bytes;
+  if (!read_rest(in, bytes, kMaxInputBytes)) {
+    error = file.string() + ": " + too_large(kMaxInputBytes);
+    return std::nullopt;
+  }
+  return bytes;
 }
 
 FileResolver FileResolver::beside(const std::string& scene_path) {
