@@ -13,60 +13,27 @@ namespace rayfarm::cli {
 
 std::string display_name(const std::string& path) { return path == "-" ? "<stdin>" : path; }
 
-namespace {
-
-// "larger than 1 GiB, the most rayfarm reads from one input"
-std::string too_large(std::uintmax_t limit) {
-  const bool gib = limit % (std::uintmax_t{1} << 30) == 0;
-  return "larger than " + std::to_string(gib ? limit >> 30 : limit >> 20) +
-         (gib ? " GiB" : " MiB") + ", the most rayfarm reads from one input";
-}
-
-// Reads what is left of `in` onto `text`, at most `limit` bytes in all; false past that.
-bool read_rest(std::istream& in, std::string& text, std::uintmax_t limit) {
-  char buf[65536];
-  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
-    const auto n = static_cast<std::size_t>(in.gcount());
-    if (text.size() + n > limit) return false;
-    text.append(buf, n);
-  }
-  return true;
-}
-
-}  // namespace
-
-std::optional<std::string> read_input(const std::string& path, std::uintmax_t limit) {
-  std::string text;
-  auto refuse = [&] {
-    std::cerr << "rayfarm: " << display_name(path) << ": " << too_large(limit) << "\n";
+std::optional<std::string> read_input(const std::string& path, std::string* why,
+                                      std::uintmax_t limit) {
+  auto fail = [&](const std::string& reason) -> std::optional<std::string> {
+    if (why) *why = reason;
+    else std::cerr << "rayfarm: " << reason << "\n";
     return std::nullopt;
   };
+  std::string text;
   if (path == "-") {
-    if (!read_rest(std::cin, text, limit)) return refuse();
+    if (!read_bounded(std::cin, {}, limit, text))
+      return fail(display_name(path) + ": " + too_large(limit));
     return text;
   }
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    std::cerr << "rayfarm: " << path << ": is a directory\n";
-    return std::nullopt;
-  }
+  if (std::filesystem::is_directory(path, ec)) return fail(path + ": is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    std::cerr << "rayfarm: cannot open " << path << ": " << std::strerror(errno) << "\n";
-    return std::nullopt;
+    const int err = errno;  // before anything else can set it
+    return fail("cannot open " + path + ": " + std::strerror(err));
   }
-  // One read of the file's size, then whatever is left (a file that grew, or one whose size
-  // the system does not know, such as a pipe or a device).
-  std::error_code size_ec;
-  auto size = std::filesystem::file_size(path, size_ec);
-  if (!size_ec && size > limit) return refuse();
-  if (!size_ec && size > 0) {
-    text.resize(static_cast<size_t>(size));
-    in.read(text.data(), static_cast<std::streamsize>(text.size()));
-    text.resize(static_cast<size_t>(in.gcount()));
-    if (!in) return text;  // end of file before the size (it shrank)
-  }
-  if (!read_rest(in, text, limit)) return refuse();
+  if (!read_bounded(in, path, limit, text)) return fail(path + ": " + too_large(limit));
   return text;
 }
 
@@ -171,11 +138,12 @@ std::optional<std::string> FileResolver::read(const std::string& path, std::stri
   }
   std::ifstream in(file, std::ios::binary);
   if (!in) {
-    error = file.string() + ": " + std::strerror(errno);
+    const int err = errno;
+    error = file.string() + ": " + std::strerror(err);
     return std::nullopt;
   }
   std::string bytes;
-  if (!read_rest(in, bytes, kMaxInputBytes)) {
+  if (!read_bounded(in, file, kMaxInputBytes, bytes)) {
     error = file.string() + ": " + too_large(kMaxInputBytes);
     return std::nullopt;
   }

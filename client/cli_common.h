@@ -11,6 +11,7 @@
 
 #include "rayfarm/load.h"
 #include "rayfarm/options.h"
+#include "read_file.h"
 
 namespace rayfarm::cli {
 
@@ -39,14 +40,9 @@ std::string usage_message(const CLI::App& app, const CLI::ParseError& e);
 // `format` is --format's value, empty when not given.
 std::string check_output(const std::string& out, const std::string& format);
 
-// The most read_input takes from one file or stream: far above any scene or image rayfarm
-// can use (the largest image, 2^28 pixels, is 768 MiB as PPM), and an end to a device or pipe
-// that never ends (`rayfarm render /dev/zero` filled memory until the program aborted).
-inline constexpr std::uintmax_t kMaxInputBytes = std::uintmax_t{1} << 30;
-
-// Reads a file, or standard input for "-". nullopt with a message on stderr on failure,
-// including an input of more than `limit` bytes.
-std::optional<std::string> read_input(const std::string& path,
+// Reads a file, or standard input for "-", whole: at most `limit` bytes (read_file.h). nullopt
+// on failure, with the reason in `why` or, without it, said on stderr.
+std::optional<std::string> read_input(const std::string& path, std::string* why = nullptr,
                                       std::uintmax_t limit = kMaxInputBytes);
 // Writes to a file (atomically: temp + rename), or standard output for "-".
 bool write_output(const std::string& path, const void* data, size_t size);

@@ -168,9 +168,10 @@ class LocalBackend final : public Backend {
       *error = "scene '" + path + "' was not found beside the assignment (" + file.string() + ")";
       return std::nullopt;
     }
-    auto text = read_input(file.string());
+    std::string why;
+    auto text = read_input(file.string(), &why);
     if (!text) {
-      *error = "cannot read scene '" + file.string() + "'";
+      *error = "cannot read scene '" + path + "': " + why;
       return std::nullopt;
     }
     return load_scene_files(path, *text, FileResolver::beside(file.string()), file.string(), error);
@@ -181,8 +182,9 @@ class LocalBackend final : public Backend {
     const std::string key = reference_key(scene, options);
     const fs::path cached = cache_.empty() ? fs::path() : cache_ / (key + ".png");
     std::error_code ec;
+    std::string unread;  // a cached image that cannot be read is rendered again
     if (!cached.empty() && fs::is_regular_file(cached, ec))
-      if (auto bytes = read_input(cached.string()))
+      if (auto bytes = read_input(cached.string(), &unread))
         if (auto image = decode_image(*bytes, error)) return image;
     RenderStats stats;
     Image image = render_image(*scene.loaded->scene, options, args_.threads, &stats, {}, nullptr, error);
@@ -226,8 +228,8 @@ class LocalBackend final : public Backend {
       s.error = "your image " + test.image + " was not found";
       return s;
     }
-    auto bytes = read_input(file.string());
     std::string error;
+    auto bytes = read_input(file.string(), &error);
     if (bytes) s.image = decode_image(*bytes, &error);
     if (!s.image) s.error = "your image " + file.filename().string() + " cannot be read: " + error;
     return s;
@@ -275,8 +277,14 @@ class LocalBackend final : public Backend {
         s.error = "your program wrote no image (" + s.note + ")";
         return s;
       }
-      bytes = read_input(out.string()).value_or("");
+      std::string why;
+      auto written = read_input(out.string(), &why);
       fs::remove(out, ec);
+      if (!written) {
+        s.error = "your program's image cannot be read: " + why + " (" + s.note + ")";
+        return s;
+      }
+      bytes = std::move(*written);
     } else {
       bytes = std::move(r.output);
     }
@@ -361,9 +369,10 @@ Runner add_grade(CLI::App& app) {
       return kBadInput;
     }
     GradeResult result;
-    auto text = read_input(args->assignment);
+    std::string why;
+    auto text = read_input(args->assignment, &why);
     if (!text) {
-      result.error = "cannot read the assignment " + args->assignment;
+      result.error = "cannot read the assignment: " + why;
       emit(*args, result, *format);
       return kBadInput;
     }
@@ -409,12 +418,14 @@ Runner add_grade(CLI::App& app) {
     }
     std::error_code ec;
     if (!args->lock.empty() || fs::exists(lock, ec)) {
-      auto lock_text = read_input(lock.string());
+      std::string unread;
+      auto lock_text = read_input(lock.string(), &unread);
       nlohmann::json lock_doc = lock_text ? nlohmann::json::parse(*lock_text, nullptr, false)
                                           : nlohmann::json();
-      std::vector<std::string> problems = lock_doc.is_discarded()
-                                              ? std::vector<std::string>{"the lock file is not JSON"}
-                                              : check_lock(result, lock_doc);
+      std::vector<std::string> problems =
+          !lock_text              ? std::vector<std::string>{"the lock file cannot be read: " + unread}
+          : lock_doc.is_discarded() ? std::vector<std::string>{"the lock file is not JSON"}
+                                    : check_lock(result, lock_doc);
       if (!problems.empty()) {
         result.error = "the references are not the ones in " + lock.string() + ": " + problems.front() +
                        (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : "");
