@@ -422,10 +422,10 @@ Runner add_grade(CLI::App& app) {
       auto lock_text = read_input(lock.string(), &unread);
       nlohmann::json lock_doc = lock_text ? nlohmann::json::parse(*lock_text, nullptr, false)
                                           : nlohmann::json();
-      std::vector<std::string> problems =
-          !lock_text              ? std::vector<std::string>{"the lock file cannot be read: " + unread}
-          : lock_doc.is_discarded() ? std::vector<std::string>{"the lock file is not JSON"}
-                                    : check_lock(result, lock_doc);
+      std::vector<std::string> problems;
+      if (!lock_text) problems = {"the lock file cannot be read: " + unread};
+      else if (lock_doc.is_discarded()) problems = {"the lock file is not JSON"};
+      else problems = check_lock(result, lock_doc);
       if (!problems.empty()) {
         result.error = "the references are not the ones in " + lock.string() + ": " + problems.front() +
                        (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : "");

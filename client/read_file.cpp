@@ -1,12 +1,14 @@
+// Bounded reads of whole files and streams (read_file.h).
 #include "read_file.h"
 
 namespace rayfarm::cli {
 
 std::string too_large(std::uintmax_t limit) {
   constexpr std::uintmax_t kMiB = std::uintmax_t{1} << 20, kGiB = std::uintmax_t{1} << 30;
-  const std::string amount = limit >= kGiB && limit % kGiB == 0   ? std::to_string(limit / kGiB) + " GiB"
-                             : limit >= kMiB && limit % kMiB == 0 ? std::to_string(limit / kMiB) + " MiB"
-                                                                  : std::to_string(limit) + " bytes";
+  std::string amount;
+  if (limit >= kGiB && limit % kGiB == 0) amount = std::to_string(limit / kGiB) + " GiB";
+  else if (limit >= kMiB && limit % kMiB == 0) amount = std::to_string(limit / kMiB) + " MiB";
+  else amount = std::to_string(limit) + " bytes";
   return "larger than " + amount + ", the most rayfarm reads from one input";
 }
 

@@ -20,7 +20,8 @@ using rayfarm::cli::read_bounded;
 using rayfarm::cli::too_large;
 
 fs::path temp(const std::string& name) {
-  return fs::temp_directory_path() / ("rayfarm-read-file-" + std::to_string(::getpid()) + "-" + name);
+  const std::string pid = std::to_string(::getpid());
+  return fs::temp_directory_path() / ("rayfarm-read-file-" + pid + "-" + name);
 }
 
 std::string bytes(std::size_t n) {
