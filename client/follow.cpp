@@ -104,6 +104,8 @@ Event parse_event(const std::string& block) {
   return e;
 }
 
+constexpr size_t kMaxEventBytes = size_t{1} << 20;
+
 enum class StreamEnd { final_status, user_interrupt, shutdown, unavailable };
 
 // Reads the event stream until the job ends. `unavailable` when the server offers none or
@@ -118,9 +120,10 @@ StreamEnd read_events(const Remote& remote, const std::string& id, RemoteBar& ba
           end = StreamEnd::user_interrupt;
           return false;
         }
+        size_t from = buffer.empty() ? 0 : buffer.size() - 1;  // where a "\n\n" can start
         for (size_t i = 0; i < size; ++i)
           if (data[i] != '\r') buffer += data[i];
-        for (size_t at; (at = buffer.find("\n\n")) != std::string::npos;) {
+        for (size_t at; (at = buffer.find("\n\n", from)) != std::string::npos; from = 0) {
           const Event e = parse_event(buffer.substr(0, at));
           buffer.erase(0, at + 2);
           if (e.name == "shutdown") {
@@ -137,7 +140,9 @@ StreamEnd read_events(const Remote& remote, const std::string& id, RemoteBar& ba
             return false;
           }
         }
-        return true;
+        // A job's status is a few hundred bytes: an event that never ends is no status, and
+        // polling takes over.
+        return buffer.size() <= kMaxEventBytes;
       });
   return end;
 }

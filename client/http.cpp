@@ -75,10 +75,10 @@ class Unavailable final : public HttpClient {
 
 }  // namespace
 
-std::unique_ptr<HttpClient> http_client(const std::string& url, const HttpTimeouts& timeouts) {
+std::unique_ptr<HttpClient> http_client(const std::string& url, const HttpLimits& limits) {
   const Module& m = module();
   if (!m.factory) return std::make_unique<Unavailable>(m.error);
-  if (HttpClient* c = m.factory(url.c_str(), &timeouts)) return std::unique_ptr<HttpClient>(c);
+  if (HttpClient* c = m.factory(url.c_str(), &limits)) return std::unique_ptr<HttpClient>(c);
   return std::make_unique<Unavailable>("cannot make an HTTP client for " + url);
 }
 

@@ -5,11 +5,14 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "read_file.h"
 
 namespace rayfarm::cli {
 
@@ -20,8 +23,8 @@ struct HttpResponse {
   std::string body;
 };
 
-// What went wrong when no response arrived.
-enum class HttpError { none, connection, read, write, unavailable, other };
+// What went wrong when no response arrived (`too_large`: the body passed HttpLimits::max_body).
+enum class HttpError { none, connection, read, write, unavailable, too_large, other };
 
 // A response, or the reason there is none: `if (!res || res->status != 200)` reads as it
 // did with cpp-httplib's Result.
@@ -65,19 +68,22 @@ class HttpClient {
   virtual HttpResult del(const std::string& path, const HttpHeaders& headers) = 0;
 };
 
-// The timeouts every client of the command line uses, in seconds.
-struct HttpTimeouts {
+// The limits every client of the command line uses: timeouts in seconds, and the most a
+// response body may hold (a server that never stops sending is refused, not stored until
+// memory runs out; a streamed GET's body is its consumer's to bound).
+struct HttpLimits {
   int connect = 5;
   int read = 600;
   int write = 60;
+  std::uint64_t max_body = kMaxInputBytes;
 };
 
 // A client for `url` (http://HOST[:PORT] or https://...). Never null: when the module cannot
 // be loaded, every request fails with HttpError::unavailable and says why.
-std::unique_ptr<HttpClient> http_client(const std::string& url, const HttpTimeouts& timeouts = {});
+std::unique_ptr<HttpClient> http_client(const std::string& url, const HttpLimits& limits = {});
 
 // The module's one entry point (C linkage, so dlsym finds it by this name).
-using HttpClientFactory = HttpClient* (*)(const char* url, const HttpTimeouts* timeouts);
+using HttpClientFactory = HttpClient* (*)(const char* url, const HttpLimits* limits);
 inline constexpr const char* kHttpModuleEntry = "rayfarm_http_client";
 inline constexpr const char* kHttpModuleFile = "rayfarm-http.so";
 

@@ -64,6 +64,8 @@ int report_http_error(const HttpResult& result, const std::string& what,
       why = "cannot connect (connection refused, or no such host): is rayfarmd running there?";
     else if (e == HttpError::read || e == HttpError::write)
       why = "the connection broke off (" + why + "): the server may have stopped or timed out";
+    else if (e == HttpError::too_large)
+      why = "the server's answer is " + too_large(HttpLimits{}.max_body);
     std::cerr << "rayfarm: " << what << ": " << why << "\n";
     return kServerError;
   }

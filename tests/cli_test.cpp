@@ -2,6 +2,7 @@
 // does (the worked example in scenes/assignments/lab1, the lock file, a student's program
 // under --run, exit codes), `render`'s refusals of outputs and server URLs it cannot use,
 // usage errors and help, and the remote workflow against a real rayfarmd.
+#include <dlfcn.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -12,6 +13,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -19,6 +21,9 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "http.h"
+#include "hostile_server.h"
 
 namespace {
 
@@ -645,6 +650,141 @@ TEST_F(RemoteCli, TheHttpModuleIsNeededOnlyToTalkToAServer) {
   Outcome installed = run(alone + " render " + scene_ + nowhere);
   EXPECT_EQ(installed.code, 3) << installed.out;
   EXPECT_NE(installed.out.find("cannot connect"), std::string::npos) << installed.out;
+}
+
+// Answers a hostile or broken server might give, for the tests below.
+const std::string kOkHead = "HTTP/1.1 200 OK\r\nConnection: close\r\n";
+
+// Announces a body of 1 TiB and sends it until the client hangs up.
+void endless_declared(rayfarm::test::HostileServer& s, int fd) {
+  if (!s.send(fd, kOkHead + "Content-Type: application/json\r\nContent-Length: 1099511627776\r\n\r\n"))
+    return;
+  const std::string zeros(1 << 16, '0');
+  while (s.send(fd, zeros)) {
+  }
+}
+
+// A chunked body that never ends.
+void endless_chunked(rayfarm::test::HostileServer& s, int fd) {
+  if (!s.send(fd, kOkHead + "Transfer-Encoding: chunked\r\n\r\n")) return;
+  const std::string chunk = "10000\r\n" + std::string(1 << 16, 'x') + "\r\n";
+  while (s.send(fd, chunk)) {
+  }
+}
+
+// The client's HTTP module itself, loaded as the program loads it, with a bound of 1 MiB:
+// every method stops a body at the bound, whether announced or streamed, and keeps one of
+// exactly that size, error statuses' bodies included.
+TEST(HttpModule, ResponseBodiesStopAtTheBound) {
+  REQUIRE_CLIENT();
+  using namespace rayfarm::cli;
+  void* module = dlopen(RAYFARM_BINARY_DIR "/client/rayfarm-http.so", RTLD_NOW | RTLD_LOCAL);
+  ASSERT_NE(module, nullptr) << dlerror();
+  auto factory = reinterpret_cast<HttpClientFactory>(dlsym(module, kHttpModuleEntry));
+  ASSERT_NE(factory, nullptr);
+  constexpr std::uint64_t kBound = 1 << 20;
+  rayfarm::test::HostileServer server([&](rayfarm::test::HostileServer& s, int fd,
+                                          const std::string& request) {
+    const std::string path = request.substr(request.find(' ') + 1);
+    if (path.rfind("/declared", 0) == 0) return endless_declared(s, fd);
+    if (path.rfind("/chunked", 0) == 0) return endless_chunked(s, fd);
+    const bool over = path.rfind("/over", 0) == 0;
+    const std::string body(kBound + (over ? 1 : 0), 'b');
+    const std::string status = path.rfind("/missing", 0) == 0 ? "404 Not Found" : "200 OK";
+    s.send(fd, "HTTP/1.1 " + status + "\r\nConnection: close\r\nContent-Length: " +
+                   std::to_string(body.size()) + "\r\n\r\n" + body);
+  });
+  ASSERT_FALSE(server.url().empty());
+  HttpLimits limits;
+  limits.max_body = kBound;
+  limits.read = 10;
+  std::unique_ptr<HttpClient> client(factory(server.url().c_str(), &limits));
+  ASSERT_NE(client, nullptr);
+
+  for (const char* path : {"/declared", "/chunked", "/over"}) {
+    const auto start = std::chrono::steady_clock::now();
+    HttpResult r = client->get(path, {});
+    EXPECT_FALSE(r) << path;
+    EXPECT_EQ(r.error(), HttpError::too_large) << path << ": " << r.why();
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(8)) << path;
+  }
+  EXPECT_EQ(client->post("/chunked", {}, "{}", "application/json").error(), HttpError::too_large);
+  EXPECT_EQ(client->del("/declared", {}).error(), HttpError::too_large);
+  EXPECT_EQ(client->post_multipart("/chunked", {}, {{"scene", "x", "scene", "text/plain"}}).error(),
+            HttpError::too_large);
+
+  HttpResult exact = client->get("/exact", {});
+  ASSERT_TRUE(exact) << exact.why();
+  EXPECT_EQ(exact->status, 200);
+  EXPECT_EQ(exact->body, std::string(kBound, 'b'));
+  HttpResult missing = client->get("/missing", {});
+  ASSERT_TRUE(missing) << missing.why();
+  EXPECT_EQ(missing->status, 404);
+  EXPECT_EQ(missing->body.size(), kBound);
+  client.reset();
+  dlclose(module);
+}
+
+// The program against a server whose answers never end: a status and an image announced at
+// 1 TiB, an event stream whose one event never ends (polling takes
+// over and finds the job's end).
+TEST_F(RemoteCli, AnswersThatNeverEndAreRefusedWithAReason) {
+  REQUIRE_CLIENT();
+  const std::string id(32, 'a');
+  std::string state = "failed";
+  std::mutex mutex;
+  rayfarm::test::HostileServer server([&](rayfarm::test::HostileServer& s, int fd,
+                                          const std::string& request) {
+    const std::string path = request.substr(request.find(' ') + 1);
+    if (path.rfind("/jobs/" + id + " ", 0) == 0) {
+      std::string now;
+      {
+        std::lock_guard<std::mutex> lock(mutex);
+        now = state;
+      }
+      if (now == "declared") return endless_declared(s, fd);
+      const std::string body = R"({"id":")" + id + R"(","state":")" + now +
+                               R"(","error":{"message":"scripted"}})";
+      s.send(fd, kOkHead + "Content-Type: application/json\r\nContent-Length: " +
+                     std::to_string(body.size()) + "\r\n\r\n" + body);
+    } else if (path.rfind("/jobs/" + id + "/events", 0) == 0) {
+      if (!s.send(fd, kOkHead + "Content-Type: text/event-stream\r\n\r\ndata: ")) return;
+      const std::string more(1 << 16, 'x');
+      while (s.send(fd, more)) {
+      }
+    } else if (path.rfind("/jobs/" + id + "/image", 0) == 0) {
+      endless_declared(s, fd);  // streamed without end: HttpModule.ResponseBodiesStopAtTheBound
+    }
+  });
+  ASSERT_FALSE(server.url().empty());
+  const std::string at = " --server " + server.url() + " 2>&1";
+
+  // The one event passes 1 MiB: the stream is dropped, and the status polled says "failed".
+  Outcome waited = run(kRayfarm + " wait " + id + " -o " + out("w.png") + at);
+  EXPECT_EQ(waited.code, 1) << waited.out;
+  EXPECT_NE(waited.out.find("job " + id + " failed: scripted"), std::string::npos) << waited.out;
+
+  // Done, with an image past 1 GiB: refused, and no file written.
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    state = "done";
+  }
+  Outcome image = run(kRayfarm + " wait " + id + " -q -o " + out("i.png") + at);
+  EXPECT_EQ(image.code, 3) << image.out;
+  EXPECT_NE(image.out.find("fetching the image: the server's answer is larger than 1 GiB"),
+            std::string::npos)
+      << image.out;
+  EXPECT_FALSE(fs::exists(dir_ / "i.png"));
+
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    state = "declared";
+  }
+  Outcome status = run(kRayfarm + " status " + id + at);
+  EXPECT_EQ(status.code, 3) << status.out;
+  EXPECT_NE(status.out.find("job " + id + ": the server's answer is larger than 1 GiB"),
+            std::string::npos)
+      << status.out;
 }
 
 // docs/cli.md keeps up with --help: every option a command offers is in its section, and every
