@@ -37,27 +37,64 @@ std::optional<std::string> read_input(const std::string& path, std::string* why,
   return text;
 }
 
+namespace {
+
+// Writes all of `data` to an open stream and closes it; errno's words when that fails.
+std::string write_and_close(std::FILE* f, const void* data, size_t size) {
+  const bool written = std::fwrite(data, 1, size, f) == size && std::fflush(f) == 0;
+  const int err = errno;
+  const bool closed = std::fclose(f) == 0;
+  if (written && closed) return "";
+  return std::strerror(written ? errno : err);
+}
+
+}  // namespace
+
 bool write_output(const std::string& path, const void* data, size_t size) {
+  namespace fs = std::filesystem;
+  auto fail = [&](const std::string& why) {
+    std::cerr << "rayfarm: cannot write " << (path == "-" ? "to standard output" : path) << ": "
+              << why << "\n";
+    return false;
+  };
   if (path == "-") {
-    std::fwrite(data, 1, size, stdout);
-    return std::fflush(stdout) == 0;
-  }
-  std::string tmp = path + ".tmp" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
-    if (!out.flush()) {
-      std::cerr << "rayfarm: cannot write " << path << ": " << std::strerror(errno) << "\n";
-      std::filesystem::remove(tmp);
-      return false;
-    }
+    const bool ok = std::fwrite(data, 1, size, stdout) == size && std::fflush(stdout) == 0;
+    return ok || fail(std::strerror(errno));
   }
   std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
+  const fs::file_status target = fs::status(path, ec);  // through symbolic links
+  const bool link = fs::is_symlink(fs::symlink_status(path, ec));
+  if (fs::is_directory(target)) return fail("it is a directory");
+  // A device, a pipe or a socket (/dev/null, /dev/stdout, a FIFO), or a link to nothing yet:
+  // written where it is, as a shell's redirection would. Replacing it with a file (as the
+  // atomic write below does) would take /dev/null from everyone else on the machine.
+  if ((fs::exists(target) && !fs::is_regular_file(target)) || (link && !fs::exists(target))) {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f) return fail(std::strerror(errno));
+    const std::string why = write_and_close(f, data, size);
+    return why.empty() || fail(why);
+  }
+  // A file: written beside itself and renamed over it, so that no reader ever sees half an
+  // image. Through a link, beside and over what it names (the link stays), and with the
+  // permissions the file had.
+  fs::path file = path;
+  if (link) {
+    file = fs::canonical(path, ec);
+    if (ec) return fail(ec.message());
+  }
+  const fs::path tmp = file.string() + ".tmp" + std::to_string(::getpid());
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) return fail(std::strerror(errno));
+  if (const std::string why = write_and_close(f, data, size); !why.empty()) {
+    fs::remove(tmp, ec);
+    return fail(why);
+  }
+  if (fs::exists(target)) fs::permissions(tmp, target.permissions(), ec);
+  fs::rename(tmp, file, ec);
   if (ec) {
-    std::cerr << "rayfarm: cannot write " << path << ": " << ec.message() << "\n";
-    std::filesystem::remove(tmp, ec);
-    return false;
+    const std::string why = ec.message();
+    fs::remove(tmp, ec);
+    return fail(why);
   }
   return true;
 }

@@ -44,7 +44,9 @@ std::string check_output(const std::string& out, const std::string& format);
 // on failure, with the reason in `why` or, without it, said on stderr.
 std::optional<std::string> read_input(const std::string& path, std::string* why = nullptr,
                                       std::uintmax_t limit = kMaxInputBytes);
-// Writes to a file (atomically: temp + rename), or standard output for "-".
+// Writes to a file (atomically: temp + rename, through a symbolic link to what it names, the
+// file's permissions kept), in place to a device, pipe or socket (/dev/null stays a device),
+// or to standard output for "-". False, with the reason said on stderr, when it cannot.
 bool write_output(const std::string& path, const void* data, size_t size);
 
 // `--spp 4`, `--max-depth 3` (or `--max_depth`), ...: every option of the table as a flag.

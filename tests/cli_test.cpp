@@ -6,6 +6,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -54,6 +55,13 @@ Outcome run(const std::string& command) {
 }
 
 std::string q(const std::string& s) { return "'" + s + "'"; }
+
+bool is_png(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  char magic[8] = {};
+  in.read(magic, 8);
+  return std::string(magic + 1, 3) == "PNG";
+}
 
 // The client is built with the tests, except in sanitizer builds (CI runs these there without).
 #define REQUIRE_CLIENT()                                                          \
@@ -245,6 +253,70 @@ TEST(RenderCli, RefusesOutputsAndServersItCannotUse) {
                 out + ".png").code,
             0);
   fs::remove(fs::temp_directory_path() / "rayfarm-cli-out.png");
+}
+
+// Where the output goes: a device or a pipe is written in place (a render `-o /dev/null` once
+// replaced the machine's /dev/null with a file), a full device or a directory is refused with
+// its reason, and a file is replaced whole, through a symbolic link to what it names, keeping
+// its permissions.
+TEST(RenderCli, OutputsGoWhereTheyPoint) {
+  REQUIRE_CLIENT();
+  const fs::path dir = fs::temp_directory_path() / ("rayfarm-out-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "real");
+  const std::string render = kRayfarm + " render " + q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt") +
+                             " -q --width 40 --height 30 -o ";
+  auto status = [](const fs::path& p) { return fs::symlink_status(p).type(); };
+
+  EXPECT_EQ(run(render + "/dev/null 2>&1").code, 0);
+  EXPECT_EQ(status("/dev/null"), fs::file_type::character);
+  Outcome full = run(render + "/dev/full 2>&1");
+  EXPECT_EQ(full.code, 2);
+  EXPECT_NE(full.out.find("cannot write /dev/full: No space left on device"), std::string::npos)
+      << full.out;
+  EXPECT_EQ(status("/dev/full"), fs::file_type::character);
+  Outcome to_full = run(render + "- 2>&1 > /dev/full");
+  EXPECT_EQ(to_full.code, 2);
+  EXPECT_NE(to_full.out.find("cannot write to standard output"), std::string::npos) << to_full.out;
+
+  // A pipe: its reader gets the image (smaller than the pipe's buffer, so read once the
+  // render is done), and the pipe stays.
+  const fs::path fifo = dir / "fifo";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const int reader = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  EXPECT_EQ(run(render + q(fifo.string()) + " 2>&1").code, 0);
+  std::string got;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(reader, buf, sizeof buf)) > 0;) got.append(buf, static_cast<size_t>(n));
+  ::close(reader);
+  EXPECT_EQ(got.substr(0, 4), "\x89PNG");
+  EXPECT_EQ(status(fifo), fs::file_type::fifo);
+
+  // A new file, then the same again over it.
+  EXPECT_EQ(run(render + q((dir / "new.png").string()) + " 2>&1").code, 0);
+  EXPECT_EQ(run(render + q((dir / "new.png").string()) + " 2>&1").code, 0);
+  EXPECT_TRUE(is_png(dir / "new.png"));
+  // A link to nothing yet, then to that file: the link stays and the file gets the image.
+  const fs::path link = dir / "link.png", target = dir / "real" / "t.png";
+  fs::create_symlink("real/t.png", link);
+  EXPECT_EQ(run(render + q(link.string()) + " 2>&1").code, 0);
+  EXPECT_TRUE(is_png(target));
+  fs::permissions(target, fs::perms::owner_read | fs::perms::owner_write);
+  fs::resize_file(target, 3);
+  EXPECT_EQ(run(render + q(link.string()) + " 2>&1").code, 0);
+  EXPECT_EQ(status(link), fs::file_type::symlink);
+  EXPECT_TRUE(is_png(target));
+  EXPECT_EQ(fs::status(target).permissions(), fs::perms::owner_read | fs::perms::owner_write);
+
+  fs::create_directories(dir / "d.png");
+  Outcome directory = run(render + q((dir / "d.png").string()) + " 2>&1");
+  EXPECT_EQ(directory.code, 2);
+  EXPECT_NE(directory.out.find("d.png: it is a directory"), std::string::npos) << directory.out;
+  // Nothing left beside the outputs.
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+  fs::remove_all(dir);
 }
 
 // An input larger than the client reads (1 GiB: client/read_file.h) is refused with its name
@@ -524,13 +596,6 @@ class RemoteCli : public ::testing::Test {
   fs::path dir_;
   const std::string scene_ = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
 };
-
-bool is_png(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  char magic[8] = {};
-  in.read(magic, 8);
-  return std::string(magic + 1, 3) == "PNG";
-}
 
 TEST_F(RemoteCli, DetachPrintsTheIdThatJobsStatusAndWaitTakeUp) {
   REQUIRE_SERVER();
