@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -228,6 +229,16 @@ class LocalBackend final : public Backend {
       s.error = "your image " + test.image + " was not found";
       return s;
     }
+    // Links within the folder are fine; one out of it could hand in any file this grader
+    // can read (a cached reference among them).
+    std::error_code folder_ec, real_ec;
+    const fs::path folder = fs::canonical(args_.images, folder_ec);
+    const fs::path real = fs::canonical(file, real_ec);
+    const auto [stop, rest] = std::mismatch(folder.begin(), folder.end(), real.begin(), real.end());
+    if (folder_ec || real_ec || stop != folder.end()) {
+      s.error = "your image " + file.filename().string() + " is a link to a file outside your folder";
+      return s;
+    }
     std::string error;
     auto bytes = read_input(file.string(), &error);
     if (bytes) s.image = decode_image(*bytes, &error);
@@ -273,6 +284,13 @@ class LocalBackend final : public Backend {
     }
     std::string bytes;
     if (to_file) {
+      // A link would let the program hand in any file this grader can read (a cached
+      // reference among them): the image must be a file of its own.
+      if (fs::is_symlink(fs::symlink_status(out, ec))) {
+        fs::remove(out, ec);
+        s.error = "your program wrote a link, not an image (" + s.note + ")";
+        return s;
+      }
       if (!fs::is_regular_file(out, ec)) {
         s.error = "your program wrote no image (" + s.note + ")";
         return s;
@@ -427,14 +445,16 @@ Runner add_grade(CLI::App& app) {
       else if (lock_doc.is_discarded()) problems = {"the lock file is not JSON"};
       else problems = check_lock(result, lock_doc);
       if (!problems.empty()) {
-        result.error = "the references are not the ones in " + lock.string() + ": " + problems.front() +
-                       (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : "");
+        set_grader_error(result, "the references are not the ones in " + lock.string() + ": " +
+                                     problems.front() +
+                                     (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : ""));
         for (const std::string& p : problems) std::cerr << "rayfarm: " << p << "\n";
         emit(*args, result, *format);
         return kBadInput;
       }
     }
     if (!emit(*args, result, *format)) return kBadInput;
+    if (!result.error.empty()) return kBadInput;  // written for the platform, said above
     if (args->out != "-")
       std::cerr << "rayfarm: " << result.assignment << ": " << result.score << " / "
                 << result.max_score << " points\n";

@@ -148,6 +148,60 @@ TEST_F(GradeCli, ALockFileRefusesChangedReferences) {
   EXPECT_NE(refused["error"].get<std::string>().find("test 'A glint'"), std::string::npos);
 }
 
+// A test whose scene has errors is the instructor's to fix: nothing is graded (exit 2, a
+// result that says grader error), and no platform lists points for the tests that passed.
+TEST_F(GradeCli, AnAssignmentWhoseSceneHasErrorsGradesNothing) {
+  fs::copy(kLab + "/scenes", dir_ / "scenes");
+  fs::copy(kLab + "/lab1.json", dir_ / "lab1.json");
+  {
+    std::ofstream edit(dir_ / "scenes/glint.txt", std::ios::app);
+    edit << "\nsphere broken\n{\n  material nowhere\n  center 0 0 0\n  radius 1\n}\n";
+  }
+  const std::string args =
+      q((dir_ / "lab1.json").string()) + " --images " + q(kLab + "/students/ada");
+  Json j = grade(args, 2);
+  EXPECT_EQ(j["score"], 0);
+  EXPECT_EQ(j["error"].get<std::string>().rfind("test 'A glint': ", 0), 0u) << j["error"];
+  for (const Json& t : j["tests"]) EXPECT_EQ(t["score"], 0) << t["name"];
+  EXPECT_EQ(j["tests"][0]["status"], "passed");  // what was found stays said
+  EXPECT_EQ(j["tests"][3]["status"], "error");
+  Outcome gs = run(kRayfarm + " grade " + args + cache_ + " --format gradescope");
+  EXPECT_EQ(gs.code, 2);
+  Json g = Json::parse(gs.out, nullptr, false);
+  ASSERT_FALSE(g.is_discarded()) << gs.out;
+  EXPECT_EQ(g["score"], 0);
+  for (const Json& t : g["tests"]) EXPECT_EQ(t["score"], 0) << t["name"];
+  EXPECT_NE(g["output"].get<std::string>().find("grader error: test 'A glint'"), std::string::npos);
+}
+
+// What a student hands in must be theirs: a link out of their folder, or a program's link,
+// is no image; and a program that overwrites the grader's cached references changes no
+// grade (every reference is read before any student's program runs).
+TEST_F(GradeCli, AStudentCannotHandInAnotherFile) {
+  const std::string assignment = q(kLab + "/lab1.json");
+  const std::string ada = kLab + "/students/ada", ben = kLab + "/students/ben";
+  EXPECT_EQ(grade(assignment + " --images " + q(ada))["score"], 10);  // fills the cache
+  const fs::path sneaky = dir_ / "sneaky";
+  fs::create_directories(sneaky / "real");
+  for (const char* name : {"shadows.png", "mirror.png", "glint.png"})
+    fs::create_symlink(fs::path(ada) / name, sneaky / name);
+  fs::copy_file(fs::path(ada) / "spheres.png", sneaky / "real" / "spheres.png");
+  fs::create_symlink("real/spheres.png", sneaky / "spheres.png");  // inside: fine
+  Json linked = grade(assignment + " --images " + q(sneaky.string()));
+  EXPECT_EQ(linked["score"], 2);
+  EXPECT_EQ(linked["tests"][1]["message"], "your image shadows.png is a link to a file outside your folder");
+
+  Json link_run = grade(assignment + " --run " + q("ln -s " + ada + "/$(basename {scene} .txt).png {out}"));
+  EXPECT_EQ(link_run["score"], 0);
+  EXPECT_EQ(link_run["tests"][0]["message"].get<std::string>().rfind("your program wrote a link", 0), 0u)
+      << link_run["tests"][0]["message"];
+
+  const std::string poison = "for c in " + q((dir_ / "cache").string()) + "/*.png; do cp " + ben +
+                             "/spheres.png \"$c\"; done; cp " + ada +
+                             "/$(basename {scene} .txt).png {out}";
+  EXPECT_EQ(grade(assignment + " --run " + q(poison))["score"], 10);
+}
+
 TEST_F(GradeCli, AStudentsProgramUnderRun) {
   const std::string assignment = q(kLab + "/lab1.json");
   const std::string ada = kLab + "/students/ada";

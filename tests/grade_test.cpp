@@ -236,6 +236,8 @@ TEST(Grade, MissingUnreadableAndWronglySizedImagesFailWithAHint) {
             "your image is 48x64, the reference is 64x48: width and height are swapped "
             "(pixeldim gives columns, then rows)");
   EXPECT_EQ(r.tests[3].status, "error");
+  // A test without its reference makes the whole result the grader's error.
+  EXPECT_EQ(r.error.rfind("test 'no scene': ", 0), 0u) << r.error;
   EXPECT_EQ(r.score, 0);
   EXPECT_EQ(r.max_score, 4);
 }

@@ -134,7 +134,14 @@ struct GradeSettings {
   int threads = 0;  // for the per-pixel records of hints (0: all cores)
 };
 
+// Grades every test. A test whose reference cannot be had (its scene has errors, its
+// options conflict) is the assignment's fault, not the student's: the whole result is then a
+// grader error (set_grader_error), never a silent zero for that test.
 GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSettings& settings);
+
+// Makes the result a grader error saying `why`: every score 0 (the total and each test's, so
+// that no platform lists points the grade does not give); statuses and messages stay.
+void set_grader_error(GradeResult& r, std::string why);
 
 // The hints for one comparison (grade() calls it; exposed for tests and /compare).
 // `record` renders nothing: `alternative` renders the test's scene with other options.

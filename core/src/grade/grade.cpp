@@ -73,12 +73,51 @@ std::string sha256_of_image(const Image& image) {
   return sha256_hex(bytes);
 }
 
+void set_grader_error(GradeResult& r, std::string why) {
+  r.error = std::move(why);
+  r.score = 0;
+  for (TestResult& t : r.tests) t.score = 0;
+}
+
 GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSettings& settings) {
   GradeResult out;
   out.assignment = assignment.name;
   std::map<std::string, std::optional<SceneFiles>> scenes;  // tests often share a scene
   std::map<std::string, std::string> scene_errors;
+  // Every reference before any student's image: a student's program (`--run`) runs as the
+  // grader does, and must not change a reference this grade has yet to read (a cached one).
+  struct Reference {
+    RenderOptions options;
+    std::optional<Image> image;
+    std::string error;  // why there is none
+  };
+  std::vector<Reference> references;
   for (const TestSpec& t : assignment.tests) {
+    Reference& ref = references.emplace_back();
+    if (!scenes.count(t.scene)) scenes[t.scene] = backend.scene(t.scene, &scene_errors[t.scene]);
+    const std::optional<SceneFiles>& scene = scenes[t.scene];
+    if (!scene) {
+      ref.error = "the reference could not be rendered: " + scene_errors[t.scene];
+      continue;
+    }
+    ref.options = settings.base;
+    Diagnostics diags;
+    apply_options(ref.options, scene->loaded->scene->render, diags);
+    apply_options(ref.options, t.options, diags);
+    if (diags.has_errors()) {
+      ref.error = "the test's options: " + diags.first_error()->message;
+      continue;
+    }
+    if (std::string conflict = profile_conflict(ref.options); !conflict.empty()) {
+      ref.error = "the test's options: " + conflict;
+      continue;
+    }
+    std::string error;
+    ref.image = backend.render(*scene, ref.options, &error);
+    if (!ref.image) ref.error = "the reference could not be rendered: " + error;
+  }
+  for (std::size_t k = 0; k < assignment.tests.size(); ++k) {
+    const TestSpec& t = assignment.tests[k];
     TestResult r;
     r.name = t.name;
     r.problem = t.problem;
@@ -95,29 +134,13 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
     };
 
     std::string error;
-    if (!scenes.count(t.scene)) scenes[t.scene] = backend.scene(t.scene, &scene_errors[t.scene]);
-    const std::optional<SceneFiles>& scene = scenes[t.scene];
-    if (!scene) {
-      fail("error", "the reference could not be rendered: " + scene_errors[t.scene]);
-      continue;
-    }
-    RenderOptions options = settings.base;
-    Diagnostics diags;
-    apply_options(options, scene->loaded->scene->render, diags);
-    apply_options(options, t.options, diags);
-    if (diags.has_errors()) {
-      fail("error", "the test's options: " + diags.first_error()->message);
-      continue;
-    }
-    if (std::string conflict = profile_conflict(options); !conflict.empty()) {
-      fail("error", "the test's options: " + conflict);
-      continue;
-    }
-    std::optional<Image> reference = backend.render(*scene, options, &error);
+    std::optional<Image>& reference = references[k].image;
     if (!reference) {
-      fail("error", "the reference could not be rendered: " + error);
+      fail("error", references[k].error);
       continue;
     }
+    const std::optional<SceneFiles>& scene = scenes[t.scene];
+    const RenderOptions& options = references[k].options;
     r.reference_sha256 = sha256_of_image(*reference);
     r.reference_key = reference_key(*scene, options);
 
@@ -189,6 +212,11 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
     out.tests.push_back(std::move(r));
   }
   out.score = std::round(out.score * 10000) / 10000;
+  for (const TestResult& t : out.tests)
+    if (t.status == "error") {
+      set_grader_error(out, "test '" + t.name + "': " + t.message);
+      break;
+    }
   return out;
 }
 
