@@ -65,6 +65,36 @@ TEST(ScaledTwins, ImageIsUnchangedWhenTheSceneIsScaledByAMillionEitherWay) {
   }
 }
 
+// A direction is any numbers, not all zero: one whose square overflows or underflows double
+// (a normal of 1e300 or 1e-320, a spotlight aimed 1e200 away) renders as the same direction
+// of ordinary length does, in both profiles, instead of vanishing or being refused.
+TEST(ScaledTwins, DirectionsOfAnyLengthRenderAsTheUnitOne) {
+  auto scene = [](const std::string& normal, const std::string& axis, const std::string& aim,
+                  const std::string& xdir) {
+    return test::scene_from(
+        "camera c { pixeldim 40 30 worlddim 8 6 viewpoint 4 3 5 }\n"
+        "material g { ambient 2 2 2 diffuse .8 .8 .8 specular .3 .3 .3 }\n"
+        "light l { location 2.5 5 -1.5 emissivity 4 4 4 }\n"
+        "spotlight s { location 4 5 -4 point " + aim + " theta 30 emissivity 4 4 4 }\n"
+        "plane p { material g normal " + normal + " point 0 0 0 }\n"
+        "revsurf r { material g surfer 2 base 2 0 -6 direction " + axis + " height 3 }\n"
+        "fplane f { material g normal 0 0 1 point 4 1 -5 xdir " + xdir + " dimensions 2 1 }\n");
+  };
+  const Scene unit = scene("0 1 0", "0 1 0", "4 -1 -4", "1 0 0");
+  for (const Profile profile : {Profile::lecture, Profile::cpsc102}) {
+    RenderOptions o;
+    o.profile = profile;
+    const Image expected = test::render(unit, o);
+    for (const auto& [normal, axis, aim, xdir] :
+         {std::array<std::string, 4>{"0 1e300 0", "0 1e-320 0", "4 -1e200 -4", "1e-320 0 0"},
+          std::array<std::string, 4>{"0 1e-200 0", "0 1e200 0", "4 -1e-200 -4", "1e300 0 0"}}) {
+      const Image got = test::render(scene(normal, axis, aim, xdir), o);
+      EXPECT_EQ(got.rgb, expected.rgb) << static_cast<int>(profile) << ": normal " << normal << ", axis " << axis
+                                       << ", aim " << aim << ", xdir " << xdir;
+    }
+  }
+}
+
 TEST(Precision, FloatAgreesWithDoubleWithinALevelWhereTheStableFormAllowsIt) {
   // Not in this list: huge-close (float cannot place a surface 1e6 from the origin closer
   // than 0.06).

@@ -95,7 +95,7 @@ struct ShapeMaker {
     PreparedShape<T> s;
     s.kind = PreparedShape<T>::revsurf;
     s.point = narrow<T>(r.base);
-    s.normal = narrow<T>(glm::normalize(r.direction));
+    s.normal = narrow<T>(unit_direction(r.direction));
     s.height = narrow<T>(r.height);
     s.surfer = r.surfer;
     // Around the cylinder of the part that exists, from the prepared (rounded) values the
@@ -468,9 +468,9 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
       p.spheres.push_back({narrow<T>(s->center), narrow<T>(s->radius), o.material});
   for (const Object& o : scene.objects) {
     if (const Plane* pl = o.as<Plane>()) {
-      p.planes.push_back({narrow<T>(glm::normalize(pl->normal)), narrow<T>(pl->point), o.material});
+      p.planes.push_back({narrow<T>(unit_direction(pl->normal)), narrow<T>(pl->point), o.material});
     } else if (const TiledPlane* t = o.as<TiledPlane>()) {
-      PreparedPlane<T> pp{narrow<T>(glm::normalize(t->plane.normal)), narrow<T>(t->plane.point),
+      PreparedPlane<T> pp{narrow<T>(unit_direction(t->plane.normal)), narrow<T>(t->plane.point),
                           o.material};
       pp.alt_material = t->alt_material;
       pp.world_xz = t->world_xz;
@@ -499,7 +499,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
     pl.scale = largest_coordinate(location);
     pl.kind = l.kind;
     if (l.kind == LightKind::spot) {
-      pl.direction = narrow<T>(glm::normalize(l.aim - l.location));
+      pl.direction = narrow<T>(unit_direction(l.aim - l.location));
       pl.cos_theta = narrow<T>(std::cos(l.theta * M_PI / 180));
     } else if (l.kind == LightKind::projector) {
       pl.slide = make.window(PreparedShape<T>::tex_plane, {l.normal, l.point}, l.window);

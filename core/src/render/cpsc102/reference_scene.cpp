@@ -16,8 +16,20 @@ namespace {
 
 V3 v3(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
 
+// A direction the scene gives, at a length near 1 first when its square would overflow or
+// underflow double (the program's own arithmetic then made no unit vector at all); every
+// ordinary direction is left as the program had it.
+V3 at_unit_scale(const V3& v) {
+  const double sq = dot(v, v);
+  if (sq >= std::numeric_limits<double>::min() && sq <= std::numeric_limits<double>::max()) return v;
+  const double most = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+  return most > 0 ? V3{v.x / most, v.y / most, v.z / most} : v;
+}
+V3 direction_unit(const V3& v) { return unit(at_unit_scale(v)); }
+
 // u = unit(xdir − (xdir·n) n), then n × u: the frame the .log files print.
-Frame frame_of(const V3& n, const V3& xdir) {
+Frame frame_of(const V3& n, const V3& xdir_given) {
+  const V3 xdir = at_unit_scale(xdir_given);
   const V3 u = unit(sub(xdir, scale(n, dot(xdir, n))));
   return {u, cross(n, u), n};
 }
@@ -42,7 +54,7 @@ struct Builder {
   const Image* texture(int index) const { return scene.textures.at(index).image.get(); }
 
   void plane_part(RefObject& o, const Plane& p) const {
-    o.normal = unit(v3(p.normal));
+    o.normal = direction_unit(v3(p.normal));
     o.point = v3(p.point);
     o.n_dot_point = dot(o.normal, o.point);
   }
@@ -119,7 +131,7 @@ struct Builder {
     o.kind = RefObject::revsurf;
     o.surfer = r.surfer;
     o.base = v3(r.base);
-    o.axis = unit(v3(r.direction));
+    o.axis = direction_unit(v3(r.direction));
     o.rev_height = r.height;
     return o;
   }
@@ -216,10 +228,10 @@ RefScene prepare_reference(const Scene& scene, const RenderOptions& options, int
     r.location = v3(l.location);
     r.emissivity = v3(l.emissivity);
     if (l.kind == LightKind::spot) {
-      r.direction = unit(sub(v3(l.aim), r.location));
+      r.direction = direction_unit(sub(v3(l.aim), r.location));
       r.cos_theta = R(std::cos(static_cast<X>(R(static_cast<X>(l.theta) * M_PI / 180))));
     } else if (l.kind == LightKind::projector) {
-      r.normal = unit(v3(l.normal));
+      r.normal = direction_unit(v3(l.normal));
       r.point = v3(l.point);
       r.n_dot_point = dot(r.normal, r.point);
       r.frame = frame_of(r.normal, v3(l.window.xdir));

@@ -114,7 +114,7 @@ std::array<glm::dvec3, 4> corners(const Plane& plane, const Window& w) {
 }
 
 void pov_plane_part(PovWriter& w, const Plane& p) {
-  const glm::dvec3 n = glm::normalize(PovWriter::flip(p.normal));
+  const glm::dvec3 n = unit_direction(PovWriter::flip(p.normal));
   w.out << "plane { " << w.vec(n) << ", " << w.num(glm::dot(n, PovWriter::flip(p.point)));
 }
 

@@ -5,6 +5,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "geometry/frame.h"
 #include "scene/registry.h"
 
 namespace rayfarm::entities {
@@ -46,7 +47,7 @@ void pov(PovWriter& w, int index) {
     const double y = r.height * i / (kPoints - 1);
     w.out << ", <" << w.num(radius(std::clamp(y, 0.0, r.height))) << ", " << w.num(y) << ">";
   }
-  const glm::dvec3 a = glm::normalize(PovWriter::flip(r.direction));
+  const glm::dvec3 a = unit_direction(PovWriter::flip(r.direction));
   // A frame whose y axis is the surface's axis.
   const glm::dvec3 helper = std::abs(a.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 0, 1);
   const glm::dvec3 x = glm::normalize(glm::cross(helper, a)), z = glm::cross(x, a);

@@ -26,7 +26,7 @@ constexpr AttrSpec kTriAttrs[] = {
 bool has_area(const Triangle& t) {
   const glm::dvec3 e1 = t.vertex[1] - t.vertex[0], e2 = t.vertex[2] - t.vertex[0];
   glm::dvec3 c = glm::cross(e1, e2);
-  if (t.plane) c = glm::dot(c, glm::normalize(t.plane->normal)) * glm::normalize(t.plane->normal);
+  if (t.plane) c = glm::dot(c, unit_direction(t.plane->normal)) * unit_direction(t.plane->normal);
   const double scale = glm::length(e1) * glm::length(e2);
   return glm::length(c) > 1e-12 * scale && scale > 0;
 }
@@ -74,7 +74,7 @@ void pov(PovWriter& w, int index) {
   const Triangle& t = *o.as<Triangle>();
   glm::dvec3 v[3] = {t.vertex[0], t.vertex[1], t.vertex[2]};
   if (t.plane) {
-    const glm::dvec3 n = glm::normalize(t.plane->normal);
+    const glm::dvec3 n = unit_direction(t.plane->normal);
     for (glm::dvec3& p : v) p -= glm::dot(p - t.plane->point, n) * n;
   }
   w.out << "triangle { " << w.at(v[0]) << ", " << w.at(v[1]) << ", " << w.at(v[2]) << " "
