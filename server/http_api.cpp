@@ -30,7 +30,12 @@ bool constant_time_equal(const std::string& a, const std::string& b) {
 
 }  // namespace
 
-std::string route_label(const std::string& method, const std::string& path) {
+std::string route_label(const std::string& method_sent, const std::string& path) {
+  // The method is the client's text: only the ones HTTP defines become a label (another would
+  // add a series per spelling, and could close the label's quotes).
+  std::string method = "OTHER";
+  for (const char* known : {"GET", "HEAD", "POST", "PUT", "DELETE", "OPTIONS", "PATCH"})
+    if (method_sent == known) method = known;
   // Never destroyed: a connection thread may still log a request while the process exits
   // (a server embedded without a stop, as in the fuzz harness).
   static const std::regex& job = *new std::regex(R"(^/jobs/[^/]+(/image|/events)?$)");
@@ -87,8 +92,9 @@ void HttpApi::harden() {
     const_cast<Request&>(req).headers.erase(kClientHeader);
     if (refuse(req, res)) {
       // The body (if any) is not read: it must not be taken for the next request.
-      if (req.has_header("Transfer-Encoding") ||
-          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0"))
+      if (req.has_header("Transfer-Encoding") || req.get_header_value_count("Content-Length") > 1 ||
+          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0") ||
+          res.get_header_value("Connection") == "close")
         GuardedServer::close_after(res);
       return httplib::Server::HandlerResponse::Handled;
     }
@@ -188,6 +194,15 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
     send_error(res, 414, "uri_too_long", "the request path is too long");
     return true;
   }
+  // A header name with white space in it ("Content-Length : 5") is not that header to this
+  // server, and may be to another on the way: refused, and the connection closed (RFC 9112
+  // §5.1), so that its body is never read as a request.
+  for (const auto& [name, value] : req.headers)
+    if (name.find_first_of(" \t") != std::string::npos) {
+      send_error(res, 400, "bad_header", "a header's name has white space in it");
+      res.set_header("Connection", "close");
+      return true;
+    }
   // Chunked bodies skip the payload limit in this cpp-httplib; compressed ones are inflated
   // without limit. Neither is needed by any client of this API.
   if (req.has_header("Transfer-Encoding")) {
@@ -202,10 +217,26 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
     return true;
   }
   if (req.has_header("Content-Length")) {
+    // One length, in digits (RFC 9112 §6.3): two, or one a proxy might read otherwise, would
+    // let a body be taken for the next request.
     const std::string v = req.get_header_value("Content-Length");
-    bool digits = !v.empty() && v.size() < 19 &&
-                  std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
-    if (!digits || std::stoull(v) > st.max_body_bytes) {
+    const bool digits =
+        !v.empty() && std::all_of(v.begin(), v.end(), [](char c) { return c >= '0' && c <= '9'; });
+    if (req.get_header_value_count("Content-Length") > 1 || !digits) {
+      send_error(res, 400, "bad_content_length",
+                 "the request must have one Content-Length, a number of bytes in digits");
+      return true;
+    }
+    // The library reads a body for POST, PUT, PATCH and DELETE only: on any other method
+    // one would be read as the next request.
+    const bool takes_body = req.method == "POST" || req.method == "PUT" ||
+                            req.method == "PATCH" || req.method == "DELETE";
+    if (!takes_body && v.find_first_not_of('0') != std::string::npos) {
+      send_error(res, 400, "unexpected_body",
+                 req.method.substr(0, 16) + " requests take no body; send none");
+      return true;
+    }
+    if (v.size() >= 19 || std::stoull(v) > st.max_body_bytes) {
       ApiError e;
       e.status = 413;
       e.code = "body_too_large";

@@ -102,6 +102,19 @@ bool wants_ppm(const Request& req, const JobRecord& job) {
   return job.options.format == ImageFormat::ppm;
 }
 
+ApiError failed_job_error(const JobRecord& job) {
+  const std::string& code = job.error_code;
+  ApiError e;
+  e.status = code == "timeout"         ? 422
+             : code == "bad_request"   ? 400
+             : code == "storage_error" ? 503
+                                       : 500;
+  e.code = code.empty() ? "render_failed" : code;
+  e.message = job.error;
+  if (code == "timeout") e.limit = "job_timeout";
+  return e;
+}
+
 bool param_true(const Request& req, const char* name) {
   if (!req.has_param(name)) return false;
   std::string v = req.get_param_value(name);

@@ -42,6 +42,10 @@ bool check_query(const httplib::Request& req, httplib::Response& res, std::strin
 
 // ?format=ppm, else the format the job was submitted with.
 bool wants_ppm(const httplib::Request& req, const JobRecord& job);
+
+// The answer for a failed job's result (its image, or a wait=1 render): a render that could
+// not start was refused for what it asked; a crash or a lost job is the server's.
+ApiError failed_job_error(const JobRecord& job);
 // ?NAME=1, true or yes.
 bool param_true(const httplib::Request& req, const char* name);
 

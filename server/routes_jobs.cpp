@@ -100,6 +100,8 @@ void get_job_image(Service& svc, const Request& req, Response& res) {
     return;
   }
   if (state == JobState::canceled) return send_error(res, 410, "canceled", "the job was canceled");
+  // Failed: final, so the job's own error, as a wait=1 render answers it (no Retry-After).
+  if (state == JobState::failed) return send_error(res, failed_job_error(*job));
   // Not done yet: the documented error shape, with the status beside it to poll on.
   nlohmann::json body = svc.status(*job);
   body["error"] = {{"code", "not_done"},

@@ -41,7 +41,6 @@ bool answer_when_final(Service& svc, const Request& req, Response& res, const Jo
   auto job = svc.await_final(*slot, submitted.id);
   if (!job) return false;  // expired meanwhile: the 202 says where it was
   const JobState state = job->state;
-  const std::string code = job->error_code, message = job->error;
   if (state == JobState::done) {
     if (!send_result(svc, req, res, *job))
       send_error(res, 410, "expired", "the result has already expired");
@@ -52,17 +51,7 @@ bool answer_when_final(Service& svc, const Request& req, Response& res, const Jo
     return true;
   }
   if (state == JobState::failed) {
-    ApiError e;
-    // A render that could not start was refused for what it asked (the same answer the
-    // status document gives); a crash or a lost job is the server's.
-    e.status = code == "timeout"         ? 422
-               : code == "bad_request"   ? 400
-               : code == "storage_error" ? 503
-                                         : 500;
-    e.code = code.empty() ? "render_failed" : code;
-    e.message = message;
-    if (code == "timeout") e.limit = "job_timeout";
-    send_error(res, e);
+    send_error(res, failed_job_error(*job));
     return true;
   }
   // Shutting down: the job is persisted and the client can poll for it.

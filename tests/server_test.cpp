@@ -2360,6 +2360,60 @@ TEST(ServerHardening, ChunkedBodyIsRefusedWithoutReadingIt) {
   EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
 }
 
+// Bodies the library would not read are never read as the next request: two lengths, a
+// length that is not digits, a body on a GET, a header name with a space in it ("Content-
+// Length : 5"). Each is a 400 and the end of the connection, with nothing else answered.
+TEST(ServerHardening, NoBodyIsTakenForTheNextRequest) {
+  TestServer server;
+  const std::string smuggled = "GET /nonexistent-smuggled HTTP/1.1\r\nHost: x\r\n\r\n";
+  const std::string len = std::to_string(smuggled.size());
+  for (const auto& [head, code] : std::vector<std::pair<std::string, std::string>>{
+           {"POST /check HTTP/1.1\r\nContent-Length: 0\r\nContent-Length: " + len + "\r\n",
+            "bad_content_length"},
+           {"POST /check HTTP/1.1\r\nContent-Length: +" + len + "\r\n", "bad_content_length"},
+           {"GET /healthz HTTP/1.1\r\nContent-Length: " + len + "\r\n", "unexpected_body"},
+           {"OPTIONS /jobs HTTP/1.1\r\nContent-Length: " + len + "\r\n", "unexpected_body"},
+           {"POST /check HTTP/1.1\r\nContent-Length : " + len + "\r\n", "bad_header"}}) {
+    RawConnection conn(server.port());
+    ASSERT_TRUE(conn.send(head + "Host: 127.0.0.1\r\n\r\n" + smuggled));
+    auto r = conn.read_response();
+    ASSERT_TRUE(r) << head;
+    EXPECT_EQ(r->status, 400) << head;
+    EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["code"], code) << head;
+    std::string extra;
+    EXPECT_TRUE(conn.closed_by_peer(3s, &extra)) << head;
+    EXPECT_EQ(extra.find("HTTP/1.1"), std::string::npos) << head << extra.substr(0, 200);
+  }
+  // A GET with an empty body is still a GET.
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send("GET /healthz HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n"));
+  auto ok = conn.read_response();
+  ASSERT_TRUE(ok);
+  EXPECT_EQ(ok->status, 200);
+  // Nor does a method of the client's own become a metric's label.
+  RawConnection odd(server.port());
+  ASSERT_TRUE(odd.send("X\"}injected{a=\"1 /x HTTP/1.1\r\nHost: x\r\n\r\n"));
+  odd.read_response();
+  const std::string metrics = server.client()->Get("/metrics")->body;
+  EXPECT_EQ(metrics.find("injected"), std::string::npos);
+  EXPECT_NE(metrics.find("route=\"OTHER other\""), std::string::npos) << metrics.substr(0, 2000);
+}
+
+// A failed job's image is final: its error, as wait=1 gives it, not "not done, retry".
+TEST(ServerJobs, AFailedJobsImageIsItsError) {
+  Settings s = test_settings();
+  s.job_timeout = 0.001;
+  TestServer server(s);
+  auto c = server.client();
+  const std::string id = submit(*c, kLong);
+  ASSERT_EQ(wait_final(*c, id)["state"], "failed");
+  auto r = c->Get("/jobs/" + id + "/image");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 422);
+  EXPECT_FALSE(r->has_header("Retry-After"));
+  EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["limit"], "job_timeout") << r->body;
+}
+
 TEST(ServerHardening, OversizedBodyIsRefusedBeforeA100Continue) {
   Settings s = test_settings();
   s.max_body_bytes = 64 * 1024;
