@@ -206,7 +206,7 @@ std::optional<LoadedScene> load_checked(const std::string& path, const std::stri
     if (d.severity == Severity::error || print_warnings)
       std::cerr << format_diagnostic(d, display_name(path), text);
   if (loaded.diags.truncated())
-    std::cerr << display_name(path) << ": note: too many errors (" << loaded.diags.error_count()
+    std::cerr << display_name(path) << ": note: too many errors (" << loaded.diags.error_count_text()
               << "); only the first " << Diagnostics::kMaxErrors << " are shown\n";
   if (loaded.diags.has_errors() || !loaded.scene) return std::nullopt;
   return loaded;

@@ -59,7 +59,10 @@ int check_file(const std::string& path, bool quiet, bool course, Tally& total) {
   total.errors += errors;
   total.warnings += warnings;
   if (errors > 0) {
-    std::cout << name << ": " << counted(errors, "error") << ", " << counted(warnings, "warning")
+    const std::string errors_said = loaded.diags.counted_all()
+                                        ? counted(errors, "error")
+                                        : loaded.diags.error_count_text() + " errors";
+    std::cout << name << ": " << errors_said << ", " << counted(warnings, "warning")
               << (loaded.diags.truncated()
                       ? " (only the first " + std::to_string(Diagnostics::kMaxErrors) + " shown)"
                       : "")

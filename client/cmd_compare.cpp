@@ -3,6 +3,7 @@
 // size too), 2 when an image cannot be read.
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 
 #include <nlohmann/json.hpp>
@@ -27,7 +28,7 @@ Runner add_compare(CLI::App& app) {
   auto args = std::make_shared<CompareArgs>();
   app.add_option("a", args->a, "first image (PNG or PPM)")->required();
   app.add_option("b", args->b, "second image (PNG or PPM)")->required();
-  app.add_option("--diff", args->diff, "write a heat map of the differences (PNG)");
+  app.add_option("--diff", args->diff, "write a heat map of the differences (.png or .ppm)");
   int_range(app.add_option("--threshold", args->threshold,
                            "a channel differs when it is off by more than this many levels "
                            "(default: 0)"),
@@ -48,6 +49,17 @@ Runner add_compare(CLI::App& app) {
                   "  rayfarm compare a.ppm b.png --max-bad-fraction 0.01 --json\n",
                   "the images differ (more pixels than --max-bad-fraction, or another size)"));
   return [args]() -> int {
+    // The report is on standard output: the heat map goes to a file, PNG or PPM by its name.
+    if (args->diff == "-") {
+      std::cerr << "rayfarm: --diff: the report goes to standard output; give the heat map a "
+                   "file name (.png or .ppm)\n";
+      return kBadInput;
+    }
+    if (!args->diff.empty())
+      if (std::string bad = check_output(args->diff, ""); !bad.empty()) {
+        std::cerr << "rayfarm: --diff: " << bad << "\n";
+        return kBadInput;
+      }
     std::optional<Image> images[2];
     const std::string* names[2] = {&args->a, &args->b};
     for (int i = 0; i < 2; ++i) {
@@ -71,8 +83,11 @@ Runner add_compare(CLI::App& app) {
     }
     const bool match = r->differing_fraction <= args->max_bad_fraction;
     if (!args->diff.empty()) {
-      auto png = encode_image(diff_image(*images[0], *images[1], options), ImageFormat::png);
-      if (!write_output(args->diff, png.data(), png.size())) return kBadInput;
+      std::string ext = std::filesystem::path(args->diff).extension().string();
+      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      const ImageFormat format = ext == ".ppm" ? ImageFormat::ppm : ImageFormat::png;
+      auto bytes = encode_image(diff_image(*images[0], *images[1], options), format);
+      if (!write_output(args->diff, bytes.data(), bytes.size())) return kBadInput;
     }
     if (args->json) {
       nlohmann::json j = compare_json(*r, options);

@@ -1,6 +1,7 @@
 // `rayfarm convert SCENE --to json|model|pov [-o OUT]`.
 #include <algorithm>
 #include <iostream>
+#include <optional>
 #include <set>
 
 #include "cli_common.h"
@@ -40,8 +41,20 @@ Runner add_convert(CLI::App& app) {
     if (!text) return int(kBadInput);
     auto loaded = load_checked(args->scene, *text, false, LoadDetail::full, false);
     if (!loaded) return int(kBadInput);
+    // The options as a render would take them, and a camera that exists: what is written
+    // must load and render.
+    auto checked_options = [&]() -> std::optional<RenderOptions> {
+      auto options = resolve_options(*loaded->scene, args->flags);
+      if (!options) return std::nullopt;
+      if (!loaded->scene->find_camera(options->camera)) {
+        std::cerr << "rayfarm: error: no camera named '" << options->camera << "'\n";
+        return std::nullopt;
+      }
+      return options;
+    };
     std::string out;
     if (args->to == "json") {
+      if (!checked_options()) return int(kBadInput);
       // Render options given here go into the scene's "render" object, over its own.
       for (const OptionValue& flag : args->flags.as_set()) {
         auto& render = loaded->desc.render;
@@ -74,12 +87,8 @@ Runner add_convert(CLI::App& app) {
                        "--profile, --background and --highlight\n";
           return int(kBadInput);
         }
-      auto options = resolve_options(*loaded->scene, args->flags);
+      auto options = checked_options();
       if (!options) return int(kBadInput);
-      if (!loaded->scene->find_camera(options->camera)) {
-        std::cerr << "rayfarm: error: no camera named '" << options->camera << "'\n";
-        return int(kBadInput);
-      }
       out = write_pov(*loaded->scene, *options);
     }
     return write_output(args->out, out.data(), out.size()) ? int(kOk) : int(kBadInput);

@@ -11,8 +11,7 @@ namespace {
 
 struct TraceArgs {
   std::string scene;
-  int x = 0;
-  int y = 0;
+  std::string x, y;  // decimal digits (checked), read here: CLI11 reads 010 as 8
   bool json = false;
   OptionFlags flags;
 };
@@ -22,8 +21,16 @@ struct TraceArgs {
 Runner add_trace(CLI::App& app) {
   auto args = std::make_shared<TraceArgs>();
   app.add_option("scene", args->scene, "scene file (model or JSON; - for stdin)")->required();
-  app.add_option("x", args->x, "pixel column, 0 at the left")->required();
-  app.add_option("y", args->y, "pixel row, 0 at the top")->required();
+  // Decimal digits only: the library's own integer reading takes 010 for 8 and 0x10 for 16.
+  const CLI::Validator decimal(
+      [](std::string& s) -> std::string {
+        const bool digits = !s.empty() && s.size() <= 9 &&
+                            s.find_first_not_of("0123456789") == std::string::npos;
+        return digits ? "" : "'" + s.substr(0, 40) + "' is not a pixel number (decimal digits, from 0)";
+      },
+      "PIXEL");
+  app.add_option("x", args->x, "pixel column, 0 at the left")->required()->check(decimal);
+  app.add_option("y", args->y, "pixel row, 0 at the top")->required()->check(decimal);
   app.add_flag("--json", args->json, "print the explanation as JSON");
   args->flags.add_to(app, {{"format", "trace prints the pixel's bytes, not an image"}});
   app.footer(
@@ -43,7 +50,7 @@ Runner add_trace(CLI::App& app) {
       std::cerr << "rayfarm: error: " << error << "\n";
       return kBadInput;
     }
-    const auto explanation = explainer->explain(args->x, args->y, &error);
+    const auto explanation = explainer->explain(std::stoi(args->x), std::stoi(args->y), &error);
     if (!explanation) {  // the only refusal left: a pixel outside the image
       std::cerr << "rayfarm: error: " << error << "\n";
       return kBadInput;

@@ -440,6 +440,10 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
         "--threads: must be an integer in 0..1024, got '2000'");
   usage("compare a.png b.png --threshold 300",
         "--threshold: must be an integer in 0..255, got '300'");
+  usage("compare a.png b.png --diff -",
+        "--diff: the report goes to standard output; give the heat map a file name (.png or .ppm)");
+  usage("compare a.png b.png --diff d.jpg",
+        "--diff: 'd.jpg': rayfarm writes PNG or PPM images; name the file .png or .ppm");
   usage("compare a.png b.png --max-bad-fraction x",
         "--max-bad-fraction: must be a number in 0..1, got 'x'");
   usage("render " + scene + " --background 255,0,0",
@@ -451,6 +455,10 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
         "--spp: report renders a ladder of spp (1 to 64) against a reference of --reference-spp");
   usage("trace " + scene + " 1 1 --format ppm",
         "--format: trace prints the pixel's bytes, not an image");
+  // A pixel is decimal: 010 is pixel 10 (not octal 8), 0x10 is refused.
+  usage("trace " + scene + " 0x10 1", "x: '0x10' is not a pixel number (decimal digits, from 0)");
+  EXPECT_EQ(run(kRayfarm + " trace " + scene + " 010 0").out.rfind("Pixel (10, 0) of ", 0), 0u);
+  usage("convert " + scene + " --to json --camera nosuch", "error: no camera named 'nosuch'");
   usage("convert " + scene + " --to pov --spp 8",
         "--to pov cannot use --spp: the POV-Ray file takes --camera, --width, --height, "
         "--max-depth, --profile, --background and --highlight");
@@ -519,6 +527,17 @@ TEST(CheckCli, ErrorsComeInLineOrderWithACount) {
                     q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt") + " /nonexistent.txt 2>&1");
   EXPECT_EQ(two.code, 2) << two.out;
   EXPECT_NE(two.out.find("3 files: 3 errors, 0 warnings\n"), std::string::npos) << two.out;
+  // Past the cap the reading stops: the count says so rather than a number it did not reach.
+  {
+    std::ofstream many(bad);
+    many << "camera c\n{ pixeldim 8 6\n  worlddim 8 6\n  viewpoint 4 3 5 }\nmaterial m\n{ diffuse 1 1 1 }\n";
+    for (int i = 0; i < 100; ++i) many << "sphere { material m center 1 1 1 radius 1 bogus 1 }\n";
+  }
+  Outcome capped = run(kRayfarm + " check " + q(bad.string()) + " 2>&1");
+  EXPECT_EQ(capped.code, 1);
+  EXPECT_NE(capped.out.find(": more than 50 errors, 0 warnings (only the first 50 shown)\n"),
+            std::string::npos)
+      << capped.out.substr(capped.out.size() > 300 ? capped.out.size() - 300 : 0);
   fs::remove(bad);
 }
 

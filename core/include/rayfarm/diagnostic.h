@@ -41,10 +41,18 @@ class Diagnostics {
   const std::vector<Diagnostic>& items() const { return items_; }
   const Diagnostic* first_error() const;
 
+  // A reader that stops once past the cap (the model parser: a garbage file is not worth
+  // reading to its end) says so: error_count() is then a lower bound.
+  void reading_stopped() { counted_all_ = false; }
+  bool counted_all() const { return counted_all_; }
+  // "12", or "more than 50" when reading stopped.
+  std::string error_count_text() const;
+
  private:
   std::vector<Diagnostic> items_;
   size_t errors_ = 0;
   bool truncated_ = false;
+  bool counted_all_ = true;
 };
 
 // "FILE:LINE:COL: error: MESSAGE", then the source line and a caret under the column.

@@ -65,6 +65,10 @@ void Diagnostics::warning(std::string code, std::string message, Where where) {
       {Severity::warning, std::move(code), clean(std::move(message)), std::move(where)});
 }
 
+std::string Diagnostics::error_count_text() const {
+  return counted_all_ ? std::to_string(errors_) : "more than " + std::to_string(kMaxErrors);
+}
+
 const Diagnostic* Diagnostics::first_error() const {
   for (const Diagnostic& d : items_)
     if (d.severity == Severity::error) return &d;
@@ -116,7 +120,7 @@ std::string format_diagnostics(const Diagnostics& ds, std::string_view file_name
   std::string out;
   for (const Diagnostic& d : ds.items()) out += format_diagnostic(d, file_name, source);
   if (ds.truncated())
-    out += std::string(file_name) + ": note: too many errors; " + std::to_string(ds.error_count()) +
+    out += std::string(file_name) + ": note: too many errors; " + ds.error_count_text() +
            " in all, only the first " + std::to_string(Diagnostics::kMaxErrors) + " shown\n";
   return out;
 }

@@ -68,6 +68,7 @@ class ModelParser {
         scene.entities.push_back(std::move(*stand_in));
       }
     }
+    if (lex_.peek().kind != Token::end) diags_.reading_stopped();
     return scene;
   }
 
