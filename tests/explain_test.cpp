@@ -82,6 +82,32 @@ TEST(Explain, EveryPixelOfEveryBundledSceneExplainsToItsRenderedBytes) {
   }
 }
 
+// Past 64 samples a pixel's explanation lists the first 64 and counts the rest in its mean,
+// which still gives the rendered bytes (a million samples once took gigabytes).
+TEST(Explain, ManySamplesAreCountedNotListed) {
+  LoadedScene loaded = load_bundled("scenes/lab.txt");
+  ASSERT_TRUE(loaded.scene);
+  for (Profile profile : {Profile::lecture, Profile::cpsc102}) {
+    RenderOptions o = small(profile);
+    o.spp = 100;
+    const Image image = test::render(*loaded.scene, o, 2);
+    std::string error;
+    const auto e = explain_pixel(*loaded.scene, o, 20, 20, &error);
+    ASSERT_TRUE(e) << error;
+    ASSERT_EQ(e->samples.size(), 100u);
+    EXPECT_FALSE(e->samples[kExplainedSamples - 1].hits.empty());
+    EXPECT_TRUE(e->samples[kExplainedSamples].hits.empty());
+    const std::array<int, 3> got = {e->bytes[0], e->bytes[1], e->bytes[2]};
+    EXPECT_EQ(got, test::pixel(image, 20, 20));
+    const nlohmann::json j = explanation_json(*e);
+    EXPECT_EQ(j["samples"].size(), static_cast<std::size_t>(kExplainedSamples));
+    EXPECT_EQ(j["sample_count"], 100);
+    const std::string text = explanation_text(*e);
+    EXPECT_NE(text.find("Samples 65 to 100 are in the mean below, not listed."), std::string::npos);
+    EXPECT_EQ(text.find("Sample 65 of 100"), std::string::npos);
+  }
+}
+
 TEST(Explain, JsonScenesExplainLikeTheirModelTwins) {
   LoadedScene model = load_bundled("scenes/lab.txt"), json = load_bundled("scenes/lab.json");
   ASSERT_TRUE(model.scene && json.scene);

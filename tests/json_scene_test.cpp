@@ -447,6 +447,10 @@ TEST(JsonScene, ReportsDeepNestingCleanly) {
   Diagnostic d = single_error(closed);
   EXPECT_EQ(d.code, "json-depth");
   EXPECT_NE(d.message.find("JSON nested deeper than 64 levels"), std::string::npos) << d.message;
+  // At the place of the container one too deep: "/objects" and 63 "/0".
+  std::string deepest = "/objects";
+  for (int i = 0; i < 63; ++i) deepest += "/0";
+  EXPECT_EQ(d.where.path, deepest);
   // Unclosed, it is still reported as too deep: parsing stops at the limit.
   Diagnostic open = single_error("{\"objects\": " + std::string(n, '['));
   EXPECT_EQ(open.code, "json-depth");

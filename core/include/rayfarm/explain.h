@@ -93,6 +93,11 @@ struct PixelExplanation {
   std::string rounding;  // "nearest" or "truncate"
 };
 
+// Samples past the first 64 keep their screen point and colour only, not their hits, and
+// the text and JSON list the first 64 (the mean counts all): a pixel of a million samples
+// is explained in bounded text and some 60 bytes a sample.
+inline constexpr int kExplainedSamples = 64;
+
 // Explains pixel (x, y) of `scene` rendered with `options`: all of its `spp` samples (a
 // render stopped early by target_error or time_limit has fewer). nullopt with `error`
 // when the render could not start or the pixel is outside the image.

@@ -85,6 +85,7 @@ class TreeBuilder {
 
   const Json& root() const { return root_; }
   bool too_deep() const { return too_deep_; }
+  const std::string& deep_path() const { return deep_path_; }
   const std::string& error() const { return error_; }
   size_t error_offset() const { return error_offset_; }
   const std::vector<std::string>& duplicates() const { return duplicates_; }
@@ -137,11 +138,12 @@ class TreeBuilder {
   }
 
   bool open(Json container) {
+    Json* node = slot();  // (before the check: the path then names this container's place)
     if (frames_.size() >= static_cast<size_t>(kMaxJsonDepth)) {
       too_deep_ = true;
+      deep_path_ = path();
       return false;
     }
-    Json* node = slot();
     *node = std::move(container);
     // Safe to keep: a container only grows while it is the innermost one.
     Frame frame;
@@ -169,6 +171,7 @@ class TreeBuilder {
   std::string error_;
   size_t error_offset_ = 0;
   bool too_deep_ = false;
+  std::string deep_path_;
 };
 
 class JsonSceneReader {
@@ -428,7 +431,8 @@ SceneDesc parse_json_scene(std::string_view text, Diagnostics& diags) {
   }
   if (builder.too_deep()) {
     diags.error("json-depth",
-                "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels", at(""));
+                "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels",
+                at(builder.deep_path()));
     return {};
   }
   if (!parsed) {

@@ -340,6 +340,7 @@ std::optional<PixelExplanation> Explainer::explain(int x, int y, std::string* er
   for (int k = 0; k < std::max(1, backend_->spp()); ++k) {
     const Triple colour = tracer->trace(x, y, k, rec);
     e.samples.push_back(path_of(rec, colour, *backend_, scene_));
+    if (k >= kExplainedSamples) std::vector<PathHit>().swap(e.samples.back().hits);
   }
   backend_->finish(e);
   return e;

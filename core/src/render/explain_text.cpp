@@ -231,12 +231,14 @@ struct TextWriter {
 nlohmann::json explanation_json(const PixelExplanation& e) {
   json samples = json::array();
   for (const PathTrace& s : e.samples) {
+    if (samples.size() == static_cast<std::size_t>(kExplainedSamples)) break;
     json hits = json::array();
     for (const PathHit& h : s.hits) hits.push_back(hit_json(h));
     samples.push_back({{"screen_point", s.screen_point}, {"hits", hits}, {"colour", s.colour}});
   }
   json out = {{"x", e.x},
               {"y", e.y},
+              {"sample_count", e.samples.size()},  // "samples" lists the first 64
               {"width", e.width},
               {"height", e.height},
               {"profile", to_string(e.profile)},
@@ -264,13 +266,18 @@ std::string explanation_text(const PixelExplanation& e) {
   head += ", " + std::to_string(n) + (n == 1 ? " sample" : " samples");
   w.line(0, head);
   w.line(0, "Each hit: " + e.formula + ".");
-  for (int k = 0; k < n; ++k) {
+  for (int k = 0; k < std::min(n, kExplainedSamples); ++k) {
     const PathTrace& s = e.samples[static_cast<std::size_t>(k)];
     w.line(0, "");
     w.line(0, "Sample " + std::to_string(k + 1) + " of " + std::to_string(n) +
                   ": the primary ray crosses the screen at " + tri(s.screen_point));
     for (int i = 0; i < static_cast<int>(s.hits.size()); ++i) w.hit(s, i);
     w.line(2, "sample colour " + tri(s.colour));
+  }
+  if (n > kExplainedSamples) {
+    w.line(0, "");
+    w.line(0, "Samples " + std::to_string(kExplainedSamples + 1) + " to " + std::to_string(n) +
+                  " are in the mean below, not listed.");
   }
   w.line(0, "");
   if (n == 1) {
