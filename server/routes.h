@@ -32,9 +32,11 @@ std::optional<Image> render_and_wait(Service& svc, const Slot& slot, const std::
                                      const Params& params, const std::string& client,
                                      const TextureFiles& textures, const SubmitHow& how,
                                      ApiError& error, std::string* job_id);
-// The query parameters, and the multipart fields (parts without a file name) named in `names`.
+// The query parameters, and the multipart fields (parts without a file name) named in `names`;
+// the first name given twice goes to `repeated` (the first value is kept).
 std::map<std::string, std::string> request_fields(const httplib::Request& req,
-                                                  const std::set<std::string>& names);
+                                                  const std::set<std::string>& names,
+                                                  std::string* repeated = nullptr);
 
 // routes_grade.cpp
 void post_grade(Service& svc, const httplib::Request& req, httplib::Response& res);

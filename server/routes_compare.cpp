@@ -21,7 +21,18 @@ namespace {
 const std::set<std::string> kCompareOptions = {"threshold", "neighborhood", "diff",
                                                "max_bad_fraction"};
 
-bool truthy(const std::string& v) { return v == "1" || v == "true" || v == "yes"; }
+// A switch: 1, true or yes; 0, false or no. Anything else is refused, not taken for off.
+std::optional<bool> switch_value(const std::string& v) {
+  if (v == "1" || v == "true" || v == "yes") return true;
+  if (v == "0" || v == "false" || v == "no") return false;
+  return std::nullopt;
+}
+
+ApiError invalid_option(const std::string& name, const std::string& message) {
+  ApiError e = api_error(400, "invalid_option", message);
+  e.path = name.substr(0, 64);
+  return e;
+}
 
 }  // namespace
 
@@ -49,11 +60,15 @@ std::optional<Image> render_and_wait(Service& svc, const Slot& slot, const std::
 }
 
 std::map<std::string, std::string> request_fields(const Request& req,
-                                                  const std::set<std::string>& names) {
+                                                  const std::set<std::string>& names,
+                                                  std::string* repeated) {
   std::map<std::string, std::string> out;
-  for (const auto& [k, v] : req.params) out[k] = v;
+  auto add = [&](const std::string& k, const std::string& v) {
+    if (!out.emplace(k, v).second && repeated && repeated->empty()) *repeated = k;
+  };
+  for (const auto& [k, v] : req.params) add(k, v);
   for (const auto& [name, part] : req.files)
-    if (part.filename.empty() && names.count(name)) out[name] = part.content;
+    if (part.filename.empty() && names.count(name)) add(name, part.content);
   return out;
 }
 
@@ -65,7 +80,15 @@ void post_compare(Service& svc, const Request& req, Response& res) {
   // Form fields that name an option are options; with a scene, other parts are its textures.
   std::set<std::string> known = kCompareOptions;
   for (const OptionSpec& spec : option_specs()) known.insert(std::string(spec.name));
-  const std::map<std::string, std::string> fields = request_fields(req, known);
+  std::string repeated;
+  const std::map<std::string, std::string> fields = request_fields(req, known, &repeated);
+  if (!repeated.empty())
+    return send_error(res, invalid_option(repeated, "'" + repeated.substr(0, 64) +
+                                                        "' is given more than once; give it once"));
+  for (const char* part : {"a", "b", "scene", "image"})
+    if (req.files.count(part) > 1)
+      return send_error(res, 400, "duplicate_part",
+                        std::string("part '") + part + "' is sent more than once");
   CompareOptions options;
   double max_bad_fraction = 0;
   bool diff = false;
@@ -78,19 +101,21 @@ void post_compare(Service& svc, const Request& req, Response& res) {
         if (used != v.size() || t < 0 || t > 255) throw 0;
         options.threshold = t;
       } catch (...) {
-        return send_error(res, 400, "invalid_option", "threshold must be an integer in 0..255");
+        return send_error(res, invalid_option(k, "threshold must be an integer in 0..255"));
       }
-    } else if (k == "neighborhood") {
-      options.neighborhood = truthy(v);
-    } else if (k == "diff") {
-      diff = truthy(v);
+    } else if (k == "neighborhood" || k == "diff") {
+      const std::optional<bool> on = switch_value(v);
+      if (!on)
+        return send_error(res, invalid_option(k, k + " must be 1, true or yes, or 0, false or no; got '" +
+                                                     v.substr(0, 40) + "'"));
+      (k == "diff" ? diff : options.neighborhood) = *on;
     } else if (k == "max_bad_fraction") {
       try {
         size_t used = 0;
         max_bad_fraction = std::stod(v, &used);
         if (used != v.size() || !(max_bad_fraction >= 0 && max_bad_fraction <= 1)) throw 0;
       } catch (...) {
-        return send_error(res, 400, "invalid_option", "max_bad_fraction must be a number in 0..1");
+        return send_error(res, invalid_option(k, "max_bad_fraction must be a number in 0..1"));
       }
     } else if (with_scene && find_option(k)) {
       render_params.emplace_back(k, v);
@@ -107,17 +132,19 @@ void post_compare(Service& svc, const Request& req, Response& res) {
   std::string error;
   std::optional<Image> a, b;
   std::string job_id;
+  // No larger than the server would render: an image is decoded whole, three bytes a pixel.
+  const long long max_pixels = svc.settings().max_pixels;
   if (req.has_file("a") && req.has_file("b")) {
     for (const auto& [name, part] : req.files)
       if (name != "a" && name != "b" && !(part.filename.empty() && known.count(name)))
         return send_error(res, 400, "bad_request",
                           "unexpected part '" + name.substr(0, 64) + "' beside 'a' and 'b'");
-    a = decode_image(req.get_file_value("a").content, &error);
+    a = decode_image(req.get_file_value("a").content, &error, max_pixels);
     if (!a) return send_error(res, 400, "invalid_image", "part 'a': " + error);
-    b = decode_image(req.get_file_value("b").content, &error);
+    b = decode_image(req.get_file_value("b").content, &error, max_pixels);
     if (!b) return send_error(res, 400, "invalid_image", "part 'b': " + error);
   } else if (with_scene) {
-    b = decode_image(req.get_file_value("image").content, &error);
+    b = decode_image(req.get_file_value("image").content, &error, max_pixels);
     if (!b) return send_error(res, 400, "invalid_image", "part 'image': " + error);
     TextureFiles textures;
     if (ApiError e = texture_parts(req, {"scene", "image"}, textures)) return send_error(res, e);

@@ -120,7 +120,7 @@ class ServerBackend final : public Backend {
       return s;
     }
     std::string error;
-    s.image = decode_image(it->second.content, &error);
+    s.image = decode_image(it->second.content, &error, svc_.settings().max_pixels);
     if (!s.image) s.error = "your image " + test.image + " cannot be read: " + error;
     return s;
   }
@@ -153,8 +153,15 @@ bool plain_name(const std::string& name) {
 }  // namespace
 
 void post_grade(Service& svc, const Request& req, Response& res) {
+  std::string repeated;
   const std::map<std::string, std::string> fields =
-      request_fields(req, {"format", "assignment", "hints"});
+      request_fields(req, {"format", "assignment", "hints"}, &repeated);
+  if (!repeated.empty()) {
+    ApiError e = api_error(400, "invalid_option",
+                           "'" + repeated + "' is given more than once; give it once");
+    e.path = repeated;
+    return send_error(res, e);
+  }
   for (const auto& [k, v] : req.params)
     if (k != "format" && k != "assignment" && k != "hints") {
       ApiError e = api_error(400, "invalid_option",

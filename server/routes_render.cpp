@@ -81,6 +81,8 @@ void post_render(Service& svc, const Request& req, Response& res) {
   } else if (req.is_multipart_form_data()) {
     if (!req.has_file("scene"))
       return send_error(res, 400, "missing_scene", "multipart upload without a 'scene' part");
+    if (req.files.count("scene") > 1)
+      return send_error(res, 400, "duplicate_part", "part 'scene' is sent more than once");
     text = req.get_file_value("scene").content;
     if (ApiError e = texture_parts(req, {"scene"}, textures)) return send_error(res, e);
   } else {

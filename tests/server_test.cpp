@@ -1330,6 +1330,30 @@ TEST(ServerCompare, OptionsComeFromFormFieldsAndUnknownOnesAreRefused) {
   Json ident = json_of(c->Post("/compare", same));
   EXPECT_TRUE(ident["psnr"].is_null());
   EXPECT_EQ(ident["identical"], true);
+  // Nothing is taken silently: a switch that is neither on nor off, an option or a part given
+  // twice, an image larger than the server renders.
+  for (const char* query : {"?diff=banana", "?neighborhood=2", "?threshold=1&threshold=2"}) {
+    auto r = c->Post(std::string("/compare") + query, same);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << query;
+    EXPECT_EQ(error_of(r)["code"], "invalid_option") << query;
+    EXPECT_FALSE(error_of(r)["path"].get<std::string>().empty()) << query;
+  }
+  EXPECT_EQ(c->Post("/compare?diff=0&neighborhood=no", same)->status, 200);
+  httplib::MultipartFormDataItems twice = same;
+  twice.push_back({"a", png_bytes(b), "a2.png", "image/png"});
+  auto dup = c->Post("/compare", twice);
+  EXPECT_EQ(dup->status, 400);
+  EXPECT_EQ(error_of(dup)["code"], "duplicate_part");
+  Settings small = test_settings();
+  small.max_pixels = 50;
+  TestServer tight(small);
+  auto too_big = tight.client()->Post("/compare", same);  // 12x8 = 96 pixels
+  ASSERT_TRUE(too_big);
+  EXPECT_EQ(too_big->status, 400);
+  EXPECT_EQ(error_of(too_big)["code"], "invalid_image");
+  EXPECT_NE(error_of(too_big)["message"].get<std::string>().find("over the limit of 50 pixels"),
+            std::string::npos);
 }
 
 // ---- Methods, the index, and requests without a body ----------------------------------
@@ -1546,6 +1570,19 @@ TEST(ServerGrade, AssignmentErrorsAre400WithTheirPath) {
   EXPECT_EQ(j["tests"][0]["status"], "error");
   auto unknown = c->Post("/grade?spp=2", items);
   EXPECT_EQ(unknown->status, 400);
+}
+
+TEST(ServerRender, ASceneSentTwiceIsRefused) {
+  TestServer server;
+  auto c = server.client();
+  httplib::MultipartFormDataItems items = {{"scene", kScene, "a.txt", "text/plain"},
+                                           {"scene", kScene, "b.txt", "text/plain"}};
+  for (const char* route : {"/render", "/check"}) {
+    auto r = c->Post(route, items);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << route;
+    EXPECT_EQ(error_of(r)["code"], "duplicate_part") << route;
+  }
 }
 
 TEST(ServerCompare, DiffAnswersAPng) {

@@ -19,11 +19,14 @@ std::vector<unsigned char> encode_png(const Image& image);
 std::vector<unsigned char> encode_ppm(const Image& image);
 std::vector<unsigned char> encode_image(const Image& image, ImageFormat format);
 
-// Decodes PNG or PPM (told apart by their signatures). Images with alpha or grey are
-// converted to RGB. On failure returns nullopt and sets `error`.
-std::optional<Image> decode_image(std::string_view bytes, std::string* error);
-
 // Upper bound on pixels decode_image accepts, to keep hostile headers from allocating.
 constexpr long long kMaxDecodePixels = 64LL * 1024 * 1024;
+
+// Decodes PNG or PPM (told apart by their signatures). Images with alpha or grey are
+// converted to RGB. On failure returns nullopt and sets `error`. An image of more than
+// `max_pixels` (by its header, before anything is allocated) is refused: a server takes no
+// more than it would render.
+std::optional<Image> decode_image(std::string_view bytes, std::string* error,
+                                  long long max_pixels = kMaxDecodePixels);
 
 }  // namespace rayfarm

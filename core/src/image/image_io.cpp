@@ -38,11 +38,13 @@ void check_buffer(const Image& image) {
 
 // Checked before anything is allocated for the pixels. Each side is below 2^32, so the
 // product cannot overflow.
-std::optional<std::string> size_problem(std::uint64_t width, std::uint64_t height) {
+std::optional<std::string> size_problem(std::uint64_t width, std::uint64_t height,
+                                        long long max_pixels) {
   if (width == 0 || height == 0) return "image has no pixels (" + size_text(width, height) + ")";
-  if (width * height > static_cast<std::uint64_t>(kMaxDecodePixels)) {
+  const std::uint64_t most = static_cast<std::uint64_t>(std::clamp(max_pixels, 1LL, kMaxDecodePixels));
+  if (width * height > most) {
     return "image too large: " + size_text(width, height) + " is over the limit of " +
-           std::to_string(kMaxDecodePixels) + " pixels";
+           std::to_string(most) + " pixels";
   }
   return std::nullopt;
 }
@@ -73,14 +75,14 @@ std::optional<std::string> without_empty_idats(std::string_view png) {
   return out;
 }
 
-std::optional<Image> decode_png(std::string_view bytes, std::string* error) {
+std::optional<Image> decode_png(std::string_view bytes, std::string* error, long long max_pixels) {
   // IHDR is read here so that a hostile size is refused before stb allocates anything.
   if (bytes.size() < 8 + 8 + 13 || read_be32(bytes, 8) != 13 || bytes.substr(12, 4) != "IHDR") {
     return fail(error, "corrupt PNG: no IHDR chunk after the signature");
   }
   std::uint64_t width = read_be32(bytes, 16);
   std::uint64_t height = read_be32(bytes, 20);
-  if (auto problem = size_problem(width, height)) return fail(error, *problem);
+  if (auto problem = size_problem(width, height, max_pixels)) return fail(error, *problem);
   if (bytes.size() > INT_MAX) return fail(error, "PNG file too large to decode");
   auto cleaned = without_empty_idats(bytes);
   if (cleaned) bytes = *cleaned;
@@ -132,7 +134,7 @@ PpmNumber read_number(std::string_view s, std::size_t& pos) {
   return {PpmNumber::ok, value};
 }
 
-std::optional<Image> decode_ppm(std::string_view s, std::string* error) {
+std::optional<Image> decode_ppm(std::string_view s, std::string* error, long long max_pixels) {
   bool ascii = s[1] == '3';
   std::size_t pos = 2;
   if (pos < s.size() && !is_space(s[pos]) && s[pos] != '#') {
@@ -151,7 +153,7 @@ std::optional<Image> decode_ppm(std::string_view s, std::string* error) {
     fields[i] = number.value;
   }
   std::uint64_t width = fields[0], height = fields[1], maxval = fields[2];
-  if (auto problem = size_problem(width, height)) return fail(error, *problem);
+  if (auto problem = size_problem(width, height, max_pixels)) return fail(error, *problem);
   if (maxval < 1 || maxval > 65535) {
     return fail(error, "bad PPM header: maxval " + std::to_string(maxval) + " is not in 1..65535");
   }
@@ -300,10 +302,11 @@ std::vector<unsigned char> encode_image(const Image& image, ImageFormat format) 
   return format == ImageFormat::ppm ? encode_ppm(image) : encode_png(image);
 }
 
-std::optional<Image> decode_image(std::string_view bytes, std::string* error) {
-  if (bytes.starts_with(kPngSignature)) return decode_png(bytes, error);
+std::optional<Image> decode_image(std::string_view bytes, std::string* error,
+                                  long long max_pixels) {
+  if (bytes.starts_with(kPngSignature)) return decode_png(bytes, error, max_pixels);
   if (bytes.size() >= 2 && bytes[0] == 'P' && (bytes[1] == '3' || bytes[1] == '6')) {
-    return decode_ppm(bytes, error);
+    return decode_ppm(bytes, error, max_pixels);
   }
   if (bytes.size() >= 2 && bytes[0] == 'P' && bytes[1] >= '1' && bytes[1] <= '7') {
     return fail(error, "unsupported Netpbm type P" + std::string(1, bytes[1]) +
