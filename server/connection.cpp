@@ -21,6 +21,8 @@ struct ConnectionState {
   bool close_after = false;
   std::size_t head_bytes = 0;
   Clock::time_point head_deadline{};
+  Clock::time_point body_start{};  // when the head was complete
+  std::size_t body_bytes = 0;      // read since
 };
 
 thread_local ConnectionState* current = nullptr;
@@ -87,6 +89,13 @@ class SocketStream final : public httplib::Stream {
         if (state_.head_bytes >= limits_.max_head_bytes) return -1;
         timeout = std::min(timeout, ms_until(state_.head_deadline));
         if (timeout == 0) return -1;
+      } else {
+        // The next byte of the body is due by the grace plus what the bytes so far earned.
+        const auto earned = std::chrono::milliseconds(
+            static_cast<long long>(1000.0 * static_cast<double>(state_.body_bytes) /
+                                   static_cast<double>(std::max<std::size_t>(1, limits_.min_body_rate))));
+        timeout = std::min(timeout, ms_until(state_.body_start + limits_.head_timeout + earned));
+        if (timeout == 0) return -1;
       }
       if (poll_for(fd_, POLLIN, timeout) <= 0) return -1;
       ssize_t n;
@@ -100,6 +109,7 @@ class SocketStream final : public httplib::Stream {
     std::memcpy(ptr, buf_ + pos_, n);
     pos_ += n;
     if (!state_.head_complete) state_.head_bytes += n;
+    else state_.body_bytes += n;
     return static_cast<ssize_t>(n);
   }
 
@@ -146,7 +156,10 @@ void lingering_close(int fd) {
 }  // namespace
 
 void GuardedServer::head_complete() {
-  if (current) current->head_complete = true;
+  if (current && !current->head_complete) {
+    current->head_complete = true;
+    current->body_start = Clock::now();
+  }
 }
 
 void GuardedServer::close_after(httplib::Response& res) {

@@ -18,6 +18,11 @@ namespace rayfarm::server {
 struct ConnectionLimits {
   std::size_t max_head_bytes = 64 * 1024;        // request line and headers together
   std::chrono::milliseconds head_timeout{10000};  // to receive them, from the first byte
+  // The body then arrives at this many bytes a second at least, after a grace of
+  // head_timeout: a client that trickles a body (a byte every few seconds keeps each read
+  // under the read timeout) cannot hold a connection thread for long, and 64 of them cannot
+  // silence the server. A slow but real upload (a 16 MB scene over 1 Mbit/s) still fits.
+  std::size_t min_body_rate = 8 * 1024;
 };
 
 class GuardedServer : public httplib::Server {

@@ -2635,6 +2635,26 @@ TEST(ServerHardening, TricklingHeadIsCutOffAtTheHeaderTimeout) {
   EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
 }
 
+// A body trickled a byte at a time (each within the read timeout) is cut off once it falls
+// behind the minimum rate after the grace: 64 such clients once held every HTTP thread.
+TEST(ServerHardening, TricklingBodyIsCutOffAtTheMinimumRate) {
+  Settings s = test_settings();
+  s.header_timeout = 1;
+  TestServer server(s);
+  RawConnection conn(server.port());
+  auto start = Clock::now();
+  ASSERT_TRUE(conn.send("POST /check HTTP/1.1\r\nHost: x\r\nContent-Type: text/plain\r\n"
+                        "Content-Length: 100\r\n\r\n"));
+  bool closed = false;
+  for (int i = 0; i < 100 && !closed; ++i) {
+    if (!conn.send("#")) break;
+    closed = conn.closed_by_peer(200ms);
+  }
+  EXPECT_TRUE(closed || conn.closed_by_peer(1s));
+  EXPECT_LT(Clock::now() - start, 3s);
+  EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
+}
+
 TEST(ServerHardening, CurlStyleFormUploadOver8KiBWorks) {
   TestServer server;
   // curl --data-binary @scene.txt labels the body a urlencoded form.
