@@ -173,6 +173,11 @@ std::optional<std::string> FileResolver::read(const std::string& path, std::stri
     error = file.string() + " is a directory";
     return std::nullopt;
   }
+  // Opening a pipe waits for a writer, for ever if none comes: a texture is a file.
+  if (std::filesystem::is_fifo(file, ec) || std::filesystem::is_socket(file, ec)) {
+    error = file.string() + " is a pipe, not a file";
+    return std::nullopt;
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     const int err = errno;

@@ -2,6 +2,7 @@
 #include "http_util.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <vector>
 
@@ -133,11 +134,15 @@ ApiError texture_parts(const Request& req, std::initializer_list<std::string_vie
 }
 
 std::string bearer_token(const Request& req) {
+  // One Authorization header (two could name two clients); its scheme in any case (RFC 9110
+  // §11.1).
+  if (req.get_header_value_count("Authorization") != 1) return {};
   std::string auth = req.get_header_value("Authorization");
-  const std::string prefix = "Bearer ";
-  if (auth.size() > prefix.size() && auth.compare(0, prefix.size(), prefix) == 0)
-    return auth.substr(prefix.size());
-  return {};
+  const std::string prefix = "bearer ";
+  if (auth.size() <= prefix.size()) return {};
+  for (std::size_t i = 0; i < prefix.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(auth[i])) != prefix[i]) return {};
+  return auth.substr(prefix.size());
 }
 
 std::string client_of(const Request& req) {

@@ -378,6 +378,28 @@ TEST(RenderCli, OutputsGoWhereTheyPoint) {
 // error of the scene at its place: `render /dev/zero` once filled memory until the program
 // aborted. (tests/read_file_test.cpp holds the limit's edge.) Memory is capped for the runs, so
 // that a regression fails here rather than filling the machine.
+// A texture that is a pipe would be opened for ever (no writer comes): it is refused at its
+// place, at once.
+TEST(RenderCli, APipeIsNoTexture) {
+  REQUIRE_CLIENT();
+  const fs::path dir = fs::temp_directory_path() / ("rayfarm-fifo-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  ASSERT_EQ(mkfifo((dir / "pipe.ppm").c_str(), 0600), 0);
+  std::ofstream(dir / "scene.txt")
+      << "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+         "material m { diffuse 1 1 1 }\n"
+         "texture t { filename pipe.ppm }\n"
+         "texplane w { material m normal 0 0 1 point 0 0 -5 xdir 1 0 0 dimensions 8 6 "
+         "texname t mode 0 }\n";
+  const auto start = std::chrono::steady_clock::now();
+  Outcome r = run("timeout 20 " + kRayfarm + " check " + q((dir / "scene.txt").string()) + " 2>&1");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("pipe.ppm is a pipe, not a file"), std::string::npos) << r.out;
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  fs::remove_all(dir);
+}
+
 TEST(RenderCli, InputsPastTheLimitAreRefused) {
   REQUIRE_CLIENT();
   const std::string pid = std::to_string(::getpid());

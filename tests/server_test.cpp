@@ -2100,6 +2100,12 @@ TEST(ServerAuth, ConfiguredTokensAreRequired) {
   EXPECT_EQ(code_of(none->Get("/jobs/" + id)), 401);
   EXPECT_EQ(code_of(none->Get("/healthz")), 200);
   EXPECT_EQ(code_of(server.client("other")->Get("/jobs")), 200);
+  // The scheme in any case; two headers are no token at all.
+  EXPECT_EQ(code_of(none->Get("/jobs", {{"Authorization", "bearer s3cret"}})), 200);
+  EXPECT_EQ(code_of(none->Get("/jobs", {{"Authorization", "BEARER s3cret"}})), 200);
+  EXPECT_EQ(code_of(none->Get("/jobs", {{"Authorization", "Bearer s3cret"},
+                                         {"Authorization", "Bearer other"}})),
+            401);
 }
 
 // ---- The web page and cross-origin access -------------------------------------------------
