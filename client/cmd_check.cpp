@@ -30,12 +30,14 @@ int check_file(const std::string& path, bool quiet, bool course, Tally& total) {
   const FileResolver files = FileResolver::beside(path);
   LoadedScene loaded = load_scene(*text, LoadDetail::scene, &files);
   std::vector<Diagnostic> all = loaded.diags.items();
+  size_t lint_errors = 0;  // an image too large to render
   if (loaded.scene && !loaded.diags.has_errors()) {
     RenderOptions options;
     Diagnostics scratch, lints;
     apply_options(options, loaded.scene->render, scratch);
     lint_scene(*loaded.scene, options, lints);
     all.insert(all.end(), lints.items().begin(), lints.items().end());
+    lint_errors = lints.error_count();
   }
   // Course warnings also for files rayfarm rejects: the student wants every problem.
   if (course) {
@@ -55,7 +57,7 @@ int check_file(const std::string& path, bool quiet, bool course, Tally& total) {
     std::cerr << format_diagnostic(d, name, *text);
     warnings += d.severity == Severity::warning;
   }
-  const size_t errors = loaded.diags.error_count();
+  const size_t errors = loaded.diags.error_count() + lint_errors;
   total.errors += errors;
   total.warnings += warnings;
   if (errors > 0) {

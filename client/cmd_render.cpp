@@ -149,13 +149,16 @@ Runner add_render(CLI::App& app) {
     if (!options) return kBadInput;
     const std::string& out = out_path;
     options->format = format_for(out, args->flags);
-    if (!args->quiet) {
+    {
       // What `check` would warn about (a sphere behind the eye, a light inside an object):
-      // a black image with no word is the worst answer to such a scene.
+      // a black image with no word is the worst answer to such a scene. Its errors (an image
+      // too large) are said with their place whatever --quiet says, and stop here.
       Diagnostics lints;
       lint_scene(*loaded->scene, *options, lints);
       for (const Diagnostic& d : lints.items())
-        std::cerr << format_diagnostic(d, display_name(args->scene), *text);
+        if (!args->quiet || d.severity == Severity::error)
+          std::cerr << format_diagnostic(d, display_name(args->scene), *text);
+      if (lints.has_errors()) return kBadInput;
     }
 
     // Neither the text, its parsed description nor the scene's objects are read past this

@@ -57,9 +57,12 @@ void post_check(Service& svc, const Request& req, Response& res) {
   const bool model = detect_format(text) == SceneFormat::model;
   if (course && model) lint_course(text, warnings);
 
-  nlohmann::json body = {{"ok", loaded.scene.has_value()},
+  // The lints' one error (an image too large for any render) joins the loader's.
+  nlohmann::json errors = diagnostics_json(loaded.diags, Severity::error);
+  for (const nlohmann::json& e : diagnostics_json(warnings, Severity::error)) errors.push_back(e);
+  nlohmann::json body = {{"ok", loaded.scene.has_value() && errors.empty()},
                          {"format", model ? "model" : "json"},
-                         {"errors", diagnostics_json(loaded.diags, Severity::error)},
+                         {"errors", std::move(errors)},
                          {"warnings", diagnostics_json(warnings, Severity::warning)}};
   if (loaded.scene) {
     const Scene& s = *loaded.scene;

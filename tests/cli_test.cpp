@@ -563,6 +563,39 @@ TEST(CheckCli, ErrorsComeInLineOrderWithACount) {
   fs::remove(bad);
 }
 
+// render refuses an image too large to hold; check says so first, with the camera's place.
+TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
+  REQUIRE_CLIENT();
+  const fs::path dir =
+      fs::temp_directory_path() / ("rayfarm-cli-huge-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const fs::path scene = dir / "huge.txt";
+  std::ofstream(scene) << "material m { ambient 1 }\n"
+                          "camera c { pixeldim 65535 65535 worlddim 8 6 viewpoint 4 3 5 }\n"
+                          "sphere s { material m center 4 3 -5 radius 1 }\n";
+  Outcome check = run(kRayfarm + " check " + q(scene.string()) + " 2>&1");
+  EXPECT_EQ(check.code, 1) << check.out;
+  EXPECT_NE(check.out.find("huge.txt:2:1: error: camera 'c': the image has 4294836225 pixels"),
+            std::string::npos)
+      << check.out;
+  EXPECT_NE(check.out.find(": 1 error, 0 warnings\n"), std::string::npos) << check.out;
+  // render stops with the same place, --quiet or not, and writes nothing.
+  const fs::path out = dir / "huge.png";
+  for (const std::string flags : {"", " -q"}) {
+    Outcome r = run(kRayfarm + " render" + flags + " " + q(scene.string()) + " -o " +
+                    q(out.string()) + " 2>&1");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("huge.txt:2:1: error: camera 'c'"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  // The same view, smaller, renders.
+  Outcome small = run(kRayfarm + " render -q " + q(scene.string()) +
+                      " --width 80 --height 60 -o " + q(out.string()) + " 2>&1");
+  EXPECT_EQ(small.code, 0) << small.out;
+  EXPECT_TRUE(fs::exists(out));
+  fs::remove_all(dir);
+}
+
 TEST(ReportCli, TheSppLadderStopsBelowTheReference) {
   REQUIRE_CLIENT();
   const fs::path out =

@@ -18,7 +18,9 @@
 #include "rayfarm/lint.h"
 #include "rayfarm/load.h"
 #include "rayfarm/model_parser.h"
+#include "rayfarm/render.h"
 #include "rayfarm/writers.h"
+#include "render/render_checks.h"
 #include "test_util.h"
 
 namespace rayfarm {
@@ -493,6 +495,46 @@ TEST(Lint, ChecksTheChosenCamera) {
   RenderOptions options;
   options.camera = "inside";
   EXPECT_EQ(codes(lint(text, options)), std::vector<std::string>{"eye-inside-sphere"});
+}
+
+// The one lint that is an error: render would refuse the image, so check must not say "ok".
+TEST(Lint, AnImageTooLargeToRenderIsAnErrorAtItsCamera) {
+  auto errors_of = [](std::string_view text, const RenderOptions& options) {
+    LoadedScene loaded = load_scene(text);
+    EXPECT_TRUE(loaded.scene.has_value()) << dump(loaded.diags);
+    Diagnostics diags;
+    if (loaded.scene) lint_scene(*loaded.scene, options, diags);
+    std::vector<Diagnostic> out;
+    for (const Diagnostic& d : diags.items())
+      if (d.severity == Severity::error) out.push_back(d);
+    return out;
+  };
+  const std::string huge = "material m { ambient 1 }\n"
+                           "camera wide { pixeldim 65535 65535 worlddim 8 6 viewpoint 4 3 5 }\n"
+                           "sphere s { material m center 4 3 -5 radius 1 }\n";
+  auto errors = errors_of(huge, {});
+  ASSERT_EQ(codes(errors), std::vector<std::string>{"image-too-large"});
+  EXPECT_EQ(errors[0].where.line, 2);
+  EXPECT_TRUE(contains(errors[0].message, "camera 'wide'")) << errors[0].message;
+  EXPECT_TRUE(contains(errors[0].message, "4294836225 pixels (65535 x 65535)")) << errors[0].message;
+  EXPECT_TRUE(contains(errors[0].message, "--width and --height")) << errors[0].message;
+  // Rendered smaller, the same camera is fine; the limit is render_image's own.
+  RenderOptions small;
+  small.width = 800;
+  small.height = 600;
+  EXPECT_TRUE(errors_of(huge, small).empty());
+  std::string error;
+  EXPECT_FALSE(check_render(*load_scene(huge).scene, {}, &error).has_value());
+  EXPECT_TRUE(contains(error, "4294836225 pixels")) << error;
+  // With spp above 1 the sums count too: 8000 x 8000 fits alone, not sampled.
+  const std::string big = "material m { ambient 1 }\n"
+                          "camera c { pixeldim 8000 8000 worlddim 8 6 viewpoint 4 3 5 }\n"
+                          "sphere s { material m center 4 3 -5 radius 1 }\n";
+  EXPECT_TRUE(errors_of(big, {}).empty());
+  RenderOptions sampled;
+  sampled.spp = 4;
+  ASSERT_EQ(codes(errors_of(big, sampled)), std::vector<std::string>{"image-too-large"});
+  EXPECT_TRUE(contains(errors_of(big, sampled)[0].message, "with spp > 1"));
 }
 
 }  // namespace

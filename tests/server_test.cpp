@@ -2809,6 +2809,20 @@ TEST(ServerCheck, GivesErrorsAndWarningsWithTheirPlaces) {
   EXPECT_EQ(e["errors"][0]["line"], 1);
   EXPECT_TRUE(e["errors"][0]["column"].is_number());
   EXPECT_FALSE(e.contains("scene"));
+
+  // A scene that reads but whose image no render takes is not ok either.
+  auto huge = c->Post("/check",
+                      "material m { ambient 1 }\n"
+                      "camera c { pixeldim 65535 65535 worlddim 8 6 viewpoint 4 3 5 }\n"
+                      "sphere s { material m center 4 3 -5 radius 1 }\n",
+                      "text/plain");
+  ASSERT_TRUE(huge);
+  ASSERT_EQ(huge->status, 200);
+  Json h = json_of(huge);
+  EXPECT_EQ(h["ok"], false) << huge->body;
+  ASSERT_EQ(h["errors"].size(), 1u) << huge->body;
+  EXPECT_EQ(h["errors"][0]["code"], "image-too-large");
+  EXPECT_EQ(h["errors"][0]["line"], 2);
 }
 
 TEST(ServerCheck, CourseWarningsOnRequestAndUnknownOptionsRefused) {

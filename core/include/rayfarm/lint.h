@@ -10,7 +10,8 @@
 namespace rayfarm {
 
 // Adds warnings: a light inside a sphere, the eye inside a sphere, an object behind the eye,
-// a material never used, a scene that renders entirely black, a camera option naming no camera.
+// a material never used, a scene that renders entirely black, a camera option naming no camera;
+// and one error, "image-too-large": an image that render_image would refuse for its size.
 void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags);
 
 // Adds a warning (codes "course-...") wherever the course's reference program (CPSC 102,

@@ -46,6 +46,9 @@ inline constexpr int kRenderVersion = 4;
 constexpr long long kMaxPixels = 1LL << 28;
 constexpr long long kMaxSupersampledPixels = 1LL << 25;
 
+// Why an image of width × height at `spp` samples cannot be rendered ("" when it can).
+std::string image_size_error(long long width, long long height, int spp);
+
 // Tiles [first, end) of an image in row-major order (32×32 pixels each, the last row and
 // column cut by the image's edge): the part of a job one node of a farm renders
 // (render_unit.h). Every pixel's samples depend on its position only, so the tiles of a range

@@ -3,6 +3,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "rayfarm/render.h"
+
 namespace rayfarm {
 namespace {
 
@@ -21,6 +23,18 @@ void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& d
     return;
   }
   const Camera& cam = scene.cameras[*cam_index];
+  // An error, not a warning: render refuses it. Its place is the camera's when the size is
+  // the camera's own.
+  const bool sized_here = options.width <= 0 && options.height <= 0;
+  if (std::string size = image_size_error(options.width > 0 ? options.width : cam.width,
+                                          options.height > 0 ? options.height : cam.height,
+                                          options.spp);
+      !size.empty())
+    diags.error("image-too-large",
+                sized_here ? (cam.name.empty() ? "" : label("camera", cam.name) + ": ") + size +
+                                 "; --width and --height render the same view smaller"
+                           : "with the width and height asked for, " + size,
+                sized_here ? cam.where : Where{});
   glm::dvec3 eye = cam.viewpoint;
   glm::dvec3 centre{cam.world_width / 2, cam.world_height / 2, 0};
   glm::dvec3 view = centre - eye;

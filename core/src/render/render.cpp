@@ -253,6 +253,15 @@ double RenderStats::progress() const {
          spp_target;
 }
 
+std::string image_size_error(long long width, long long height, int spp) {
+  const long long pixels = width * height;
+  const long long limit = spp > 1 ? kMaxSupersampledPixels : kMaxPixels;
+  if (pixels <= limit) return {};
+  return "the image has " + std::to_string(pixels) + " pixels (" + std::to_string(width) + " x " +
+         std::to_string(height) + "); at most " + std::to_string(limit) +
+         (spp > 1 ? " with spp > 1" : "") + " can be rendered";
+}
+
 std::optional<int> check_render(const Scene& scene, const RenderOptions& options,
                                 std::string* error) {
   auto camera = scene.find_camera(options.camera);
@@ -267,13 +276,11 @@ std::optional<int> check_render(const Scene& scene, const RenderOptions& options
   }
   // Bounds on what one process can hold: the image, and with spp > 1 the per-pixel sums.
   const Camera& cam = scene.cameras[*camera];
-  const long long pixels = static_cast<long long>(options.width > 0 ? options.width : cam.width) *
-                           (options.height > 0 ? options.height : cam.height);
-  const long long limit = options.spp > 1 ? kMaxSupersampledPixels : kMaxPixels;
-  if (pixels > limit) {
-    if (error)
-      *error = "the image has " + std::to_string(pixels) + " pixels; at most " +
-               std::to_string(limit) + (options.spp > 1 ? " with spp > 1" : "") + " can be rendered";
+  if (std::string size = image_size_error(options.width > 0 ? options.width : cam.width,
+                                          options.height > 0 ? options.height : cam.height,
+                                          options.spp);
+      !size.empty()) {
+    if (error) *error = std::move(size);
     return std::nullopt;
   }
   for (const Texture& t : scene.textures)
