@@ -83,7 +83,7 @@ class TreeBuilder {
     return false;
   }
 
-  const Json& root() const { return root_; }
+  Json& root() { return root_; }
   bool too_deep() const { return too_deep_; }
   const std::string& deep_path() const { return deep_path_; }
   const std::string& error() const { return error_; }
@@ -178,7 +178,9 @@ class JsonSceneReader {
  public:
   explicit JsonSceneReader(Diagnostics& diags) : diags_(diags) {}
 
-  SceneDesc read(const Json& root) {
+  // Each light and object's part of the tree is freed once read: the description then grows
+  // into the tree's memory instead of beside it.
+  SceneDesc read(Json& root) {
     SceneDesc scene;
     if (!root.is_object()) {
       diags_.error("json-type", "a scene must be a JSON object, not " + type_name(root), at(""));
@@ -204,12 +206,16 @@ class JsonSceneReader {
             read_entity(EntityKind::texture, name, tex, child(path, name), scene);
       } else if (key == "lights") {
         if (expect(value.is_array(), value, "an array of lights", path))
-          for (size_t i = 0; i < value.size(); ++i)
+          for (size_t i = 0; i < value.size(); ++i) {
             read_typed(EntityRole::light, value[i], child(path, i), scene);
+            value[i] = nullptr;
+          }
       } else if (key == "objects") {
         if (expect(value.is_array(), value, "an array of objects", path))
-          for (size_t i = 0; i < value.size(); ++i)
+          for (size_t i = 0; i < value.size(); ++i) {
             read_typed(EntityRole::object, value[i], child(path, i), scene);
+            value[i] = nullptr;
+          }
       } else if (key == "render") {
         read_render(value, path, scene);
       } else {
