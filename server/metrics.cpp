@@ -56,6 +56,9 @@ std::string Metrics::render_text(const Gauges& g) const {
   o << "# HELP rayfarm_waiting_requests Requests blocked in wait=1.\n"
        "# TYPE rayfarm_waiting_requests gauge\n"
     << "rayfarm_waiting_requests " << g.waiting_requests << "\n";
+  o << "# HELP rayfarm_waiting_scene_loads Large scenes waiting for their turn to be read.\n"
+       "# TYPE rayfarm_waiting_scene_loads gauge\n"
+    << "rayfarm_waiting_scene_loads " << g.waiting_loads << "\n";
   o << "# HELP rayfarm_render_seconds Render time of finished jobs.\n"
        "# TYPE rayfarm_render_seconds histogram\n";
   std::uint64_t cumulative = 0;

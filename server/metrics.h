@@ -25,6 +25,7 @@ class Metrics {
     long workers = 0;
     long event_streams = 0;
     long waiting_requests = 0;
+    long waiting_loads = 0;
     long cache_bytes = 0;
   };
   std::string render_text(const Gauges& gauges) const;

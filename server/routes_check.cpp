@@ -43,6 +43,7 @@ void post_check(Service& svc, const Request& req, Response& res) {
 
   // Textures are not read here (they are the render's to upload): a texture the scene names
   // is checked for its name, not its file.
+  const LoadGate::Pass pass = svc.enter_load(text.size());
   LoadedScene loaded = load_scene(text);
   Diagnostics warnings;
   if (loaded.scene) {

@@ -97,6 +97,7 @@ class ServerBackend final : public Backend {
     }
     const size_t slash = path.find_last_of('/');
     const SceneTextures textures(scenes_, slash == std::string::npos ? "" : path.substr(0, slash));
+    const LoadGate::Pass pass = svc_.enter_load(text->size());
     return load_scene_files(path, *text, textures, path, error);
   }
 

@@ -164,6 +164,7 @@ std::string Service::metrics_text() const {
   g.workers = scheduler_->workers();
   g.event_streams = streams_.load();
   g.waiting_requests = waiters_.load();
+  g.waiting_loads = load_gate_.waiting();
   g.cache_bytes = static_cast<long>(cache_.bytes());
   return metrics_.render_text(g) + (farm_ ? farm_->metrics_text() : std::string());
 }

@@ -5,6 +5,7 @@
 // results.cpp, samples.cpp, recovery.cpp (restart), expiry.cpp.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <map>
@@ -26,6 +27,7 @@
 #include "image_cache.h"
 #include "job.h"
 #include "job_store.h"
+#include "load_gate.h"
 #include "metrics.h"
 #include "roster.h"
 #include "scheduler.h"
@@ -96,6 +98,9 @@ class Service {
   ~Service();
 
   const Settings& settings() const { return settings_; }
+  // Held while a scene text of this size is read (load_gate.h): every request that reads a
+  // scene takes one before load_scene.
+  LoadGate::Pass enter_load(size_t bytes) { return load_gate_.enter(bytes); }
   const Roster& roster() const { return roster_; }
   // Rereads --tokens-file; on errors (printed) the roster stays as it was.
   bool reload_roster();
@@ -203,6 +208,7 @@ class Service {
   std::vector<Sample> samples_;
   std::atomic<int> streams_{0};
   std::atomic<int> waiters_{0};
+  LoadGate load_gate_{static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))};
   std::atomic<bool> shutting_down_{false};
   std::atomic<bool> stopped_{false};
   std::atomic<bool> stop_janitor_{false};

@@ -136,6 +136,7 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
     metrics_.rejected(e.limit);
     return {std::nullopt, e};
   }
+  const LoadGate::Pass pass = enter_load(scene_text.size());
   LoadedScene loaded = load_scene(scene_text);
   if (!loaded.scene) return {std::nullopt, scene_error(loaded.diags)};
   if (ApiError e = resolve_uploads(*loaded.scene, textures)) {

@@ -87,6 +87,7 @@ void Service::release_textures(const std::vector<std::string>& hashes) {
 
 std::shared_ptr<const Scene> Service::reload_scene(const std::string& text,
                                                    const std::vector<std::string>& hashes) {
+  const LoadGate::Pass pass = enter_load(text.size());
   LoadedScene loaded = load_scene(text, LoadDetail::scene);
   if (!loaded.scene || loaded.scene->textures.size() != hashes.size()) return nullptr;
   TextureFiles files;

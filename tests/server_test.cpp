@@ -2825,6 +2825,63 @@ TEST(ServerCheck, GivesErrorsAndWarningsWithTheirPlaces) {
   EXPECT_EQ(h["errors"][0]["line"], 2);
 }
 
+TEST(LoadGate, LargeTextsTakeTurnsSmallOnesNeverWait) {
+  LoadGate gate(1);
+  LoadGate::Pass first = gate.enter(LoadGate::kSmall + 1);
+  EXPECT_TRUE(first.held());
+  std::atomic<bool> second_in{false};
+  std::thread second([&] {
+    LoadGate::Pass p = gate.enter(LoadGate::kSmall + 1);
+    second_in = p.held();
+  });
+  const auto deadline = Clock::now() + 5s;
+  while (gate.waiting() == 0 && Clock::now() < deadline) std::this_thread::sleep_for(1ms);
+  EXPECT_EQ(gate.waiting(), 1);
+  EXPECT_FALSE(gate.enter(LoadGate::kSmall).held());  // small: at once, no pass taken
+  std::this_thread::sleep_for(20ms);
+  EXPECT_FALSE(second_in.load());
+  { LoadGate::Pass done = std::move(first); }  // released
+  second.join();
+  EXPECT_TRUE(second_in.load());
+  EXPECT_EQ(gate.waiting(), 0);
+  EXPECT_TRUE(gate.enter(LoadGate::kSmall + 1).held());  // the second gave its pass back
+}
+
+// Every request that reads a large scene waits for a pass: with all passes held, /check of a
+// 1.5 MB scene waits (and /metrics says so), and answers once one is free.
+TEST(ServerCheck, LargeScenesAreReadInTurn) {
+  TestServer server;
+  std::string scene = kScene;
+  for (int i = 0; scene.size() <= LoadGate::kSmall + (LoadGate::kSmall >> 1); ++i)
+    scene += "sphere b" + std::to_string(i) + " { material chrome" +
+             " center 1 2 -30 radius 0.5 }\n";
+  std::vector<LoadGate::Pass> held;
+  for (unsigned i = 0; i < std::max(1u, std::thread::hardware_concurrency()); ++i)
+    held.push_back(server.service().enter_load(LoadGate::kSmall + 1));
+  std::atomic<int> status{0};
+  std::thread check([&] {
+    auto r = server.client()->Post("/check", scene, "text/plain");
+    status = r ? r->status : -1;
+  });
+  auto waiting = [&] {
+    const std::string m = server.client()->Get("/metrics")->body;
+    return m.find("\nrayfarm_waiting_scene_loads 1\n") != std::string::npos;
+  };
+  const auto deadline = Clock::now() + 10s;
+  while (!waiting() && Clock::now() < deadline) std::this_thread::sleep_for(5ms);
+  EXPECT_TRUE(waiting());
+  EXPECT_EQ(status.load(), 0);
+  held.clear();
+  check.join();
+  EXPECT_EQ(status.load(), 200);
+  // A small scene never waited: the same check with every pass held answers.
+  for (unsigned i = 0; i < std::max(1u, std::thread::hardware_concurrency()); ++i)
+    held.push_back(server.service().enter_load(LoadGate::kSmall + 1));
+  auto small = server.client()->Post("/check", kScene, "text/plain");
+  ASSERT_TRUE(small);
+  EXPECT_EQ(small->status, 200);
+}
+
 TEST(ServerCheck, CourseWarningsOnRequestAndUnknownOptionsRefused) {
   TestServer server;
   auto c = server.client();
