@@ -32,6 +32,7 @@ void Service::on_finished(Job& job, RenderJob* render) {
   } else if (job.timed_out) {
     state = JobState::failed;
     code = "timeout";
+    st.stop_reason = "job_timeout";  // the render saw only a cancel
     message = "the job ran longer than the server's limit of " +
               format_number(settings_.job_timeout) +
               " s: lower spp, max_depth or the image size, or give time_limit to stop "

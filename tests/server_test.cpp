@@ -2449,7 +2449,10 @@ TEST(ServerJobs, AFailedJobsImageIsItsError) {
   TestServer server(s);
   auto c = server.client();
   const std::string id = submit(*c, kLong);
-  ASSERT_EQ(wait_final(*c, id)["state"], "failed");
+  const Json final_status = wait_final(*c, id);
+  ASSERT_EQ(final_status["state"], "failed");
+  EXPECT_EQ(final_status["error"]["code"], "timeout") << final_status.dump();
+  EXPECT_EQ(final_status["stats"]["stop_reason"], "job_timeout") << final_status.dump();
   auto r = c->Get("/jobs/" + id + "/image");
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 422);
