@@ -3,6 +3,8 @@
 #include "http_api.h"
 
 #include <algorithm>
+#include <cctype>
+#include <cstring>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
@@ -26,6 +28,19 @@ bool constant_time_equal(const std::string& a, const std::string& b) {
   unsigned char diff = 0;
   for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
   return diff == 0;
+}
+
+// A well-formed request line whose method no route of the server takes.
+bool unserved_method(const Request& req) {
+  if (req.method.empty() || req.method.size() > 32 ||
+      (req.version != "HTTP/1.1" && req.version != "HTTP/1.0") || req.target.empty())
+    return false;
+  for (const char* known : {"GET", "HEAD", "POST", "PUT", "DELETE", "OPTIONS", "PATCH"})
+    if (req.method == known) return false;
+  // An RFC 9110 token: anything else is a malformed request line.
+  for (unsigned char c : req.method)
+    if (c == 0 || !(std::isalnum(c) || std::strchr("!#$%&'*+-.^_`|~", c))) return false;
+  return true;
 }
 
 }  // namespace
@@ -162,6 +177,18 @@ void HttpApi::harden() {
                    "no such resource: " + req.path.substr(0, 100) + " (GET / lists the routes)");
         break;
       }
+      case 400:
+        // A well-formed request whose method the server has no route for at all (BREW,
+        // TRACE, CONNECT): 501, as HTTP asks, rather than "bad request".
+        if (unserved_method(req)) {
+          send_error(res, 501, "not_implemented",
+                     "the method " + req.method.substr(0, 16) +
+                         " is not implemented: rayfarmd serves GET, HEAD, POST, DELETE and OPTIONS");
+          res.status = 501;
+          break;
+        }
+        send_error(res, 400, "http_error", "the request could not be served");
+        break;
       case 405: send_error(res, 405, "method_not_allowed", "method not allowed"); break;
       case 413: send_error(res, 413, "body_too_large", "the request body is too large"); break;
       case 414: send_error(res, 414, "uri_too_long", "the request line is too long"); break;

@@ -2427,6 +2427,22 @@ TEST(ServerHardening, NoBodyIsTakenForTheNextRequest) {
     EXPECT_TRUE(conn.closed_by_peer(3s, &extra)) << head;
     EXPECT_EQ(extra.find("HTTP/1.1"), std::string::npos) << head << extra.substr(0, 200);
   }
+  // A method no route takes is 501 (HTTP's "not implemented"), a broken request line 400.
+  for (const std::string method : {"BREW", "TRACE", "CONNECT"}) {
+    RawConnection other(server.port());
+    ASSERT_TRUE(other.send(method + " /render HTTP/1.1\r\nHost: x\r\n\r\n"));
+    auto r = other.read_response();
+    ASSERT_TRUE(r) << method;
+    EXPECT_EQ(r->status, 501) << method;
+    EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["code"], "not_implemented") << method;
+  }
+  for (const std::string line : {"BR(EW /render HTTP/1.1", "BREW /render FTP/1.0", "GARBAGE"}) {
+    RawConnection broken(server.port());
+    ASSERT_TRUE(broken.send(line + "\r\nHost: x\r\n\r\n"));
+    auto r = broken.read_response();
+    ASSERT_TRUE(r) << line;
+    EXPECT_EQ(r->status, 400) << line;
+  }
   // A GET with an empty body is still a GET.
   RawConnection conn(server.port());
   ASSERT_TRUE(conn.send("GET /healthz HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n"));
