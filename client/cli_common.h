@@ -30,6 +30,9 @@ std::string help_footer(const std::string& examples, const std::string& exit_one
 // options' own do: "--threads: must be an integer in 0..1024, got '2000'".
 CLI::Option* int_range(CLI::Option* option, long long lo, long long hi);
 CLI::Option* number_range(CLI::Option* option, double lo, double hi);
+// A file name that may not be empty: `-o "$OUT"` with OUT unset must not fall back to a
+// default name, to standard output, or to nothing at all.
+CLI::Option* file_name(CLI::Option* option);
 
 // A command-line error in plain words: "--width given twice", "unknown option --frobnicate
 // (did you mean --format?)", "unknown command 'rendr' (did you mean 'render'?)".

@@ -87,7 +87,8 @@ Runner add_check(CLI::App& app) {
   auto files = std::make_shared<std::vector<std::string>>();
   auto quiet = std::make_shared<bool>(false);
   auto course = std::make_shared<bool>(false);
-  app.add_option("scenes", *files, "scene files (model or JSON; - for stdin)")->required();
+  file_name(app.add_option("scenes", *files, "scene files (model or JSON; - for stdin)"))
+      ->required();
   app.add_flag("-q,--quiet", *quiet, "print nothing for files without errors or warnings");
   app.add_flag("--course", *course,
                "also warn where the course's reference program (CPSC 102, 2014-18) would stop "

@@ -26,9 +26,9 @@ struct CompareArgs {
 
 Runner add_compare(CLI::App& app) {
   auto args = std::make_shared<CompareArgs>();
-  app.add_option("a", args->a, "first image (PNG or PPM)")->required();
-  app.add_option("b", args->b, "second image (PNG or PPM)")->required();
-  app.add_option("--diff", args->diff, "write a heat map of the differences (.png or .ppm)");
+  file_name(app.add_option("a", args->a, "first image (PNG or PPM)"))->required();
+  file_name(app.add_option("b", args->b, "second image (PNG or PPM)"))->required();
+  file_name(app.add_option("--diff", args->diff, "write a heat map of the differences (.png or .ppm)"));
   int_range(app.add_option("--threshold", args->threshold,
                            "a channel differs when it is off by more than this many levels "
                            "(default: 0)"),

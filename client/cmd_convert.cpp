@@ -21,11 +21,11 @@ struct ConvertArgs {
 
 Runner add_convert(CLI::App& app) {
   auto args = std::make_shared<ConvertArgs>();
-  app.add_option("scene", args->scene, "scene file (- for stdin)")->required();
+  file_name(app.add_option("scene", args->scene, "scene file (- for stdin)"))->required();
   app.add_option("--to", args->to, "target format")
       ->required()
       ->check(CLI::IsMember({"json", "model", "pov"}));
-  app.add_option("-o,--output", args->out, "output file (default: standard output)");
+  file_name(app.add_option("-o,--output", args->out, "output file (default: standard output)"));
   args->flags.add_to(app);
   app.footer(help_footer(
       "  rayfarm convert scenes/cho.txt --to json -o cho.json\n"

@@ -338,16 +338,17 @@ bool emit(const GradeArgs& args, const GradeResult& result, Format format) {
 
 Runner add_grade(CLI::App& app) {
   auto args = std::make_shared<GradeArgs>();
-  app.add_option("assignment", args->assignment, "the assignment file (JSON)")->required();
-  auto* images = app.add_option("--images", args->images, "folder of the student's images");
+  file_name(app.add_option("assignment", args->assignment, "the assignment file (JSON)"))->required();
+  auto* images =
+      file_name(app.add_option("--images", args->images, "folder of the student's images"));
   app.add_option("--run", args->run,
                  "run the student's program per test: {scene} is the scene's path, {out} the "
                  "image to write (without {out}, standard output is the image)")
       ->excludes(images);
   app.add_option("--format", args->format,
                  "gradescope, prairielearn, autolab, junit, json, html or md (default: md)");
-  app.add_option("-o,--output", args->out,
-                 "where to write the result (default: -, standard output)");
+  file_name(app.add_option("-o,--output", args->out,
+                           "where to write the result (default: -, standard output)"));
   number_range(app.add_option("--timeout", args->timeout,
                               "seconds each run of the program may take (default: 60)"),
                0.1, 86400);
@@ -359,7 +360,7 @@ Runner add_grade(CLI::App& app) {
   app.add_option("--lock", args->lock,
                  "the lock file (default: ASSIGNMENT with .lock.json); grading refuses "
                  "references that differ from it");
-  app.add_option("--cache", args->cache, "folder of cached references");
+  file_name(app.add_option("--cache", args->cache, "folder of cached references"));
   app.add_flag("--no-cache", args->no_cache, "render every reference afresh");
   app.add_flag("--no-hints", args->no_hints, "compare only");
   number_range(app.add_option("--fail-under", args->fail_under,

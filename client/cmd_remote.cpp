@@ -187,9 +187,9 @@ Runner add_cancel(CLI::App& app) {
 
 Runner add_wait(CLI::App& app) {
   auto args = add_id_args(app);
-  app.add_option("-o,--output", args->out,
-                 "save the image here when done: .png or .ppm, - for standard output "
-                 "(default: ID.png)");
+  file_name(app.add_option("-o,--output", args->out,
+                           "save the image here when done: .png or .ppm, - for standard output "
+                           "(default: ID.png)"));
   app.add_flag("-q,--quiet", args->quiet, "no progress bar or summary line");
   app.footer(
       help_footer("  rayfarm wait $id -o cho.png --server http://localhost:8080\n"

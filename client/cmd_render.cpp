@@ -79,10 +79,11 @@ void print_summary(const std::string& out, int w, int h, const RenderStats& st, 
 
 Runner add_render(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
-  app.add_option("scene", args->scene, "scene file (model or JSON; - for stdin)")->required();
-  auto* output = app.add_option(
+  file_name(app.add_option("scene", args->scene, "scene file (model or JSON; - for stdin)"))
+      ->required();
+  auto* output = file_name(app.add_option(
       "-o,--output", args->out,
-      "output image: .png or .ppm, - for standard output (default: SCENE's name with .png, here)");
+      "output image: .png or .ppm, - for standard output (default: SCENE's name with .png, here)"));
   int_range(app.add_option("--threads", args->threads, "render threads (default: all cores)"), 0,
             1024);
   app.add_flag("-q,--quiet", args->quiet, "no progress bar, warnings or summary line");

@@ -22,10 +22,10 @@ struct ReportArgs {
 
 Runner add_report(CLI::App& app) {
   auto args = std::make_shared<ReportArgs>();
-  app.add_option("scene", args->scene, "scene file")->required();
+  file_name(app.add_option("scene", args->scene, "scene file"))->required();
   const ReportSettings& d = args->settings;  // the defaults, for the help
-  app.add_option("--out", args->out,
-                 "directory for report.md, report.csv and report.svg (default: report)");
+  file_name(app.add_option("--out", args->out,
+                           "directory for report.md, report.csv and report.svg (default: report)"));
   int_range(
       app.add_option("--runs", args->settings.runs,
                      "timed runs per setting (median) (default: " + std::to_string(d.runs) + ")"),

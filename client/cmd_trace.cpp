@@ -20,7 +20,8 @@ struct TraceArgs {
 
 Runner add_trace(CLI::App& app) {
   auto args = std::make_shared<TraceArgs>();
-  app.add_option("scene", args->scene, "scene file (model or JSON; - for stdin)")->required();
+  file_name(app.add_option("scene", args->scene, "scene file (model or JSON; - for stdin)"))
+      ->required();
   // Decimal digits only: the library's own integer reading takes 010 for 8 and 0x10 for 16.
   const CLI::Validator decimal(
       [](std::string& s) -> std::string {

@@ -111,6 +111,14 @@ CLI::Option* int_range(CLI::Option* option, long long lo, long long hi) {
       ->type_name(range);
 }
 
+CLI::Option* file_name(CLI::Option* option) {
+  return option->check(CLI::Validator(
+      [](std::string& v) -> std::string {
+        return v.empty() ? "a file name cannot be empty (an unset variable?)" : "";
+      },
+      "", "file_name"));
+}
+
 CLI::Option* number_range(CLI::Option* option, double lo, double hi) {
   const std::string range = range_text(lo, hi);
   return option

@@ -596,6 +596,23 @@ TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
   fs::remove_all(dir);
 }
 
+// `-o "$OUT"` with OUT unset is a mistake to say, not a reason to write elsewhere.
+TEST(Cli, AnEmptyFileNameIsRefused) {
+  REQUIRE_CLIENT();
+  const fs::path dir = fs::temp_directory_path() / ("rayfarm-cli-empty-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
+  for (const std::string& args : std::vector<std::string>{"render " + scene + " -o ''", "render ''", "convert " + scene + " --to json -o ''",
+        "compare a.png b.png --diff ''", "check " + scene + " ''",
+        "report " + scene + " --out ''", "trace '' 1 1"}) {
+    Outcome r = run("cd " + q(dir.string()) + " && " + kRayfarm + " " + args + " 2>&1");
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find("a file name cannot be empty"), std::string::npos) << args << "\n" << r.out;
+  }
+  EXPECT_TRUE(fs::is_empty(dir)) << "nothing is written under a default name";
+  fs::remove_all(dir);
+}
+
 TEST(ReportCli, TheSppLadderStopsBelowTheReference) {
   REQUIRE_CLIENT();
   const fs::path out =
