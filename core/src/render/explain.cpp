@@ -338,9 +338,16 @@ std::optional<PixelExplanation> Explainer::explain(int x, int y, std::string* er
   const std::unique_ptr<SampleTracer> tracer = backend_->tracer();
   Recorder rec;
   for (int k = 0; k < std::max(1, backend_->spp()); ++k) {
+    // Past the listed samples only the colour counts: no blockers named, no hits copied.
+    if (k == kExplainedSamples) rec.blockers = false;
     const Triple colour = tracer->trace(x, y, k, rec);
-    e.samples.push_back(path_of(rec, colour, *backend_, scene_));
-    if (k >= kExplainedSamples) std::vector<PathHit>().swap(e.samples.back().hits);
+    if (k < kExplainedSamples) {
+      e.samples.push_back(path_of(rec, colour, *backend_, scene_));
+    } else {
+      PathTrace& sample = e.samples.emplace_back();
+      sample.screen_point = rec.screen_point;
+      sample.colour = colour;
+    }
   }
   backend_->finish(e);
   return e;
