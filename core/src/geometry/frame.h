@@ -14,16 +14,22 @@
 
 namespace rayfarm {
 
-// The unit vector along a direction the scene gives (not all zero, finite): glm::normalize
-// where |v|² is a normal double, so every ordinary direction keeps its bits; otherwise (a
-// component past 1e154, or all under 1e-154, whose square would overflow or underflow) v
-// divided by its largest |component| first, which is exact in direction.
-inline glm::dvec3 unit_direction(const glm::dvec3& v) {
-  const double sq = glm::dot(v, v);
-  if (sq >= std::numeric_limits<double>::min() && sq <= std::numeric_limits<double>::max())
-    return glm::normalize(v);
+// A direction the scene gives (finite), at a length where its square is a normal double: v
+// itself when |v|² already is, so every ordinary direction keeps its bits; otherwise (a
+// component past 1e154, or all under 1e-154) v divided by its largest |component|, which is
+// exact in direction. Any type with doubles x, y, z (the cpsc102 profile's V3 too).
+template <class V>
+V at_unit_scale(const V& v) {
+  const double sq = (v.x * v.x + v.y * v.y) + v.z * v.z;
+  if (sq >= std::numeric_limits<double>::min() && sq <= std::numeric_limits<double>::max()) return v;
   const double most = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
-  return most > 0 ? glm::normalize(v / most) : v;
+  return most > 0 ? V{v.x / most, v.y / most, v.z / most} : v;
+}
+
+// The unit vector along a direction the scene gives (not all zero, finite).
+inline glm::dvec3 unit_direction(const glm::dvec3& v) {
+  const glm::dvec3 scaled = at_unit_scale(v);
+  return scaled == glm::dvec3(0) ? v : glm::normalize(scaled);
 }
 
 struct PlaneFrame {
@@ -33,10 +39,9 @@ struct PlaneFrame {
 // nullopt when xdir has no part in the plane (parallel to the normal, to rounding).
 inline std::optional<PlaneFrame> plane_frame(const glm::dvec3& normal, const glm::dvec3& xdir) {
   const glm::dvec3 n = unit_direction(normal);
-  // xdir at a length of about 1 first (its scale does not change the frame), so that a tiny
-  // or huge one is neither parallel by underflow nor infinite.
-  const double most = std::max({std::abs(xdir.x), std::abs(xdir.y), std::abs(xdir.z)});
-  const glm::dvec3 x = most > 0 && (most < 1e-150 || most > 1e150) ? xdir / most : xdir;
+  // Its scale does not change the frame: a tiny or huge xdir is then neither parallel by
+  // underflow nor infinite.
+  const glm::dvec3 x = at_unit_scale(xdir);
   const glm::dvec3 in_plane = x - glm::dot(x, n) * n;
   if (!(glm::length(in_plane) > 1e-12 * glm::length(x))) return std::nullopt;
   const glm::dvec3 u = unit_direction(in_plane);

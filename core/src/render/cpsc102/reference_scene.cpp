@@ -9,6 +9,7 @@
 #include <glm/common.hpp>
 #include <glm/exponential.hpp>
 
+#include "geometry/frame.h"
 #include "geometry/revsurf.h"
 
 namespace rayfarm::cpsc102 {
@@ -19,12 +20,6 @@ V3 v3(const glm::dvec3& v) { return {v.x, v.y, v.z}; }
 // A direction the scene gives, at a length near 1 first when its square would overflow or
 // underflow double (the program's own arithmetic then made no unit vector at all); every
 // ordinary direction is left as the program had it.
-V3 at_unit_scale(const V3& v) {
-  const double sq = dot(v, v);
-  if (sq >= std::numeric_limits<double>::min() && sq <= std::numeric_limits<double>::max()) return v;
-  const double most = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
-  return most > 0 ? V3{v.x / most, v.y / most, v.z / most} : v;
-}
 V3 direction_unit(const V3& v) { return unit(at_unit_scale(v)); }
 
 // u = unit(xdir − (xdir·n) n), then n × u: the frame the .log files print.
