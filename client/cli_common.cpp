@@ -99,6 +99,22 @@ bool write_output(const std::string& path, const void* data, size_t size) {
   return true;
 }
 
+namespace {
+
+// ".ppm" for "x.PPM"; empty without one.
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace
+
+ImageFormat output_format(const std::string& out, const std::string& format) {
+  if (!format.empty()) return format == "ppm" ? ImageFormat::ppm : ImageFormat::png;
+  return lower_extension(out) == ".ppm" ? ImageFormat::ppm : ImageFormat::png;
+}
+
 std::string check_output(const std::string& out, const std::string& format) {
   if (out == "-") {
     if (isatty(STDOUT_FILENO))
@@ -106,8 +122,7 @@ std::string check_output(const std::string& out, const std::string& format) {
              "give -o FILE";
     return "";
   }
-  std::string ext = std::filesystem::path(out).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = lower_extension(out);
   if (ext.empty()) return "";
   if (ext != ".png" && ext != ".ppm")
     return "'" + out + "': rayfarm writes PNG or PPM images; name the file .png or .ppm";

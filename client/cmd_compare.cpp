@@ -3,7 +3,6 @@
 // size too), 2 when an image cannot be read.
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 
 #include <nlohmann/json.hpp>
@@ -83,9 +82,7 @@ Runner add_compare(CLI::App& app) {
     }
     const bool match = r->differing_fraction <= args->max_bad_fraction;
     if (!args->diff.empty()) {
-      std::string ext = std::filesystem::path(args->diff).extension().string();
-      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      const ImageFormat format = ext == ".ppm" ? ImageFormat::ppm : ImageFormat::png;
+      const ImageFormat format = output_format(args->diff);
       auto bytes = encode_image(diff_image(*images[0], *images[1], options), format);
       if (!write_output(args->diff, bytes.data(), bytes.size())) return kBadInput;
     }

@@ -207,9 +207,8 @@ Runner add_wait(CLI::App& app) {
     // Ctrl-C here stops waiting; the job is someone's to cancel with `rayfarm cancel`.
     auto status = follow_job(*remote, args->id, args->quiet, false, code);
     if (!status) return code;
-    std::string format = args->out.size() > 4 && args->out.substr(args->out.size() - 4) == ".ppm"
-                             ? "ppm" : "png";
-    return finish(*remote, *status, args->out, format, args->quiet);
+    return finish(*remote, *status, args->out, std::string(to_string(output_format(args->out))),
+                  args->quiet);
   };
 }
 

@@ -41,11 +41,8 @@ std::string default_output(const std::string& scene) {
 }
 
 ImageFormat format_for(const std::string& out, const OptionFlags& flags) {
-  if (flags.values.count("format")) return flags.values.at("format") == "ppm" ? ImageFormat::ppm
-                                                                              : ImageFormat::png;
-  std::string ext = std::filesystem::path(out).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".ppm" ? ImageFormat::ppm : ImageFormat::png;
+  const auto given = flags.values.find("format");
+  return output_format(out, given == flags.values.end() ? "" : given->second);
 }
 
 // "6.79 Mrays/s", "1.2 k primary", "12 rays/s", "0 shadow".

@@ -765,6 +765,13 @@ TEST_F(RemoteCli, DetachPrintsTheIdThatJobsStatusAndWaitTakeUp) {
   EXPECT_EQ(waited.code, 0) << waited.out;
   EXPECT_TRUE(is_png(dir_ / "w.png"));
   EXPECT_NE(waited.out.find("w.png: 400x300, spp 2, "), std::string::npos) << waited.out;
+  // The extension in any case names the encoding, as for render (".PPM" was PNG bytes).
+  Outcome as_ppm = run(kRayfarm + " wait " + id + " -q -o " + out("w.PPM") + at + " 2>&1");
+  EXPECT_EQ(as_ppm.code, 0) << as_ppm.out;
+  std::ifstream ppm(dir_ / "w.PPM", std::ios::binary);
+  std::string magic(2, '\0');
+  ppm.read(magic.data(), 2);
+  EXPECT_EQ(magic, "P6");
 
   Outcome status = run(kRayfarm + " status " + id + at);
   EXPECT_EQ(status.code, 0);
