@@ -108,8 +108,7 @@ void HttpApi::harden() {
     if (refuse(req, res)) {
       // The body (if any) is not read: it must not be taken for the next request.
       if (req.has_header("Transfer-Encoding") || req.get_header_value_count("Content-Length") > 1 ||
-          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0") ||
-          res.get_header_value("Connection") == "close")
+          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0"))
         GuardedServer::close_after(res);
       return httplib::Server::HandlerResponse::Handled;
     }
@@ -227,7 +226,7 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
   for (const auto& [name, value] : req.headers)
     if (name.find_first_of(" \t") != std::string::npos) {
       send_error(res, 400, "bad_header", "a header's name has white space in it");
-      res.set_header("Connection", "close");
+      GuardedServer::close_after(res);
       return true;
     }
   // Chunked bodies skip the payload limit in this cpp-httplib; compressed ones are inflated
