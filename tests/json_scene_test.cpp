@@ -168,7 +168,7 @@ TEST(JsonScene, RecordsTheJsonPathOfEveryEntityAndValue) {
   ASSERT_NE(center, nullptr);
   EXPECT_EQ(center->where.path, "/objects/0/center");
   ASSERT_EQ(center->value_where.size(), 3u);
-  EXPECT_EQ(center->value_where[2].path, "/objects/0/center/2");
+  EXPECT_EQ(center->value_at(2).path, "/objects/0/center/2");
   EXPECT_EQ(desc.entities[1].where.path, "/materials/m");
 }
 
@@ -535,6 +535,13 @@ TEST(JsonScene, ReportsBadRenderOptionsAtTheirPath) {
       {R"("max_dist": 0)", "bad-option", "/render/max_dist", "must be > 0"},
       {R"("camera": "nope")", "unknown-camera", "/render/camera",
        "render option camera names no camera 'nope'"},
+      // Options the scene's own profile cannot take: at the option (render would refuse them).
+      {R"("profile": "cpsc102", "max_depth": 5000)", "bad-option", "/render/max_depth",
+       "the cpsc102 profile follows rays at most 1000 bounces deep; max_depth 5000 is more"},
+      {R"("precision": "float", "profile": "cpsc102")", "bad-option", "/render/precision",
+       "precision float is not available in the cpsc102 profile"},
+      {R"("profile": "cpsc102", "seed": 4294967296)", "bad-option", "/render/seed",
+       "seed must be below 2^32"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.render);

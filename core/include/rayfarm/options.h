@@ -88,11 +88,16 @@ std::optional<std::string> apply_option(RenderOptions& options, std::string_view
 // Applies every assignment in order; reports each failure with its place.
 void apply_options(RenderOptions& options, const OptionSet& set, Diagnostics& diags);
 
+// The deepest the cpsc102 profile follows rays: it recurses as the course's program did, and
+// a render thread's stack holds this many levels with room to spare.
+inline constexpr int kCpsc102MaxDepth = 1000;
+
 // What the chosen profile cannot do with these options, once all are applied: the cpsc102
 // profile computes as the course's program did, so it has no float precision, no Blinn
-// switch (its glint is its own), no bailout, and its jitter stream takes a 32-bit seed.
-// Empty when the combination is fine.
-std::string profile_conflict(const RenderOptions& options);
+// switch (its glint is its own), no bailout, a 32-bit seed for its jitter stream, and at
+// most kCpsc102MaxDepth bounces. Empty when the combination is fine; otherwise `option`
+// (when given) names the option at fault.
+std::string profile_conflict(const RenderOptions& options, std::string* option = nullptr);
 
 // The options that change the rendered pixels, as a stable string (cache keys, reports).
 // Effective values: a profile's default and the same value given explicitly share a key.

@@ -120,6 +120,7 @@ class ValuePositions {
     if (this == &o) return *this;
     pos_ = o.pos_;
     paths_.reset(o.paths_ ? new std::vector<std::string>(*o.paths_) : nullptr);
+    json_ = o.json_;
     return *this;
   }
   ValuePositions& operator=(ValuePositions&&) noexcept = default;
@@ -139,7 +140,16 @@ class ValuePositions {
   void clear() {
     pos_.clear();
     paths_.reset();
+    json_ = 0;
   }
+  // A JSON value, whose path follows from its attribute's: that path itself (a lone number
+  // or name), or that path and the index (an array's elements). No path is stored; read
+  // such values back with AttrDesc::value_at.
+  void push_json(bool element) {
+    json_ = element ? 2 : 1;
+    pos_.push_back({});
+  }
+  int json_mode() const { return json_; }  // 0 none, 1 the attribute's path, 2 path/index
 
  private:
   struct Pos {
@@ -148,6 +158,7 @@ class ValuePositions {
   };
   SmallVec<Pos, 3> pos_;
   std::unique_ptr<std::vector<std::string>> paths_;  // one per value, when any has a path
+  std::uint8_t json_ = 0;
 };
 
 // Every entity keyword of the format, in the order of the registry (core/src/scene/registry.cpp).
@@ -163,7 +174,10 @@ struct AttrDesc {
   SmallVec<double, 3> numbers;  // numeric values as written (a one-number colour stays one)
   std::string word;             // for name- and path-valued attributes (material, texname)
   Where where;                  // the attribute keyword
-  ValuePositions value_where;  // read back as Where values
+  ValuePositions value_where;   // read back with value_at
+
+  // Where value i was written; the attribute's own place for one it has none for.
+  Where value_at(size_t i) const;
 };
 
 struct EntityDesc {

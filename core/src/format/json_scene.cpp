@@ -306,6 +306,12 @@ class JsonSceneReader {
     const bool typed = spec.role == EntityRole::light || spec.role == EntityRole::object;
     if (own_name) keys.push_back("name");
     if (typed) keys.push_back("type");
+    // As many attributes as members, less the name and type: no room grown and left over
+    // (a scene of many objects holds one of these per object).
+    size_t members = value.size();
+    if (own_name && value.contains("name")) --members;
+    if (typed && value.contains("type")) --members;
+    e.attrs.reserve(members);
 
     for (auto& [key, v] : value.items()) {
       std::string vpath = child(path, key);
@@ -350,13 +356,13 @@ class JsonSceneReader {
                      at(path));
         return false;
       }
-      a.value_where.push_back(at(path));
+      a.value_where.push_json(false);
       return true;
     }
     auto [lo, hi] = value_count(attr.kind);
     if (v.is_number() && lo == 1) {
       a.numbers.push_back(v.get<double>());
-      a.value_where.push_back(at(path));
+      a.value_where.push_json(false);
       return true;
     }
     if (!v.is_array()) {
@@ -373,13 +379,13 @@ class JsonSceneReader {
     }
     bool ok = true;
     for (size_t i = 0; i < v.size(); ++i) {
-      std::string ipath = child(path, i);
-      if (!expect(v[i].is_number(), v[i], "a number", ipath)) {
+      if (!v[i].is_number()) {
+        expect(false, v[i], "a number", child(path, i));
         ok = false;
         continue;
       }
       a.numbers.push_back(v[i].get<double>());
-      a.value_where.push_back(at(ipath));
+      a.value_where.push_json(true);
     }
     return ok;
   }

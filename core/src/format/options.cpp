@@ -268,17 +268,27 @@ void apply_options(RenderOptions& options, const OptionSet& set, Diagnostics& di
   }
 }
 
-std::string profile_conflict(const RenderOptions& o) {
+std::string profile_conflict(const RenderOptions& o, std::string* option) {
   if (o.profile != Profile::cpsc102) return {};
+  auto at = [option](const char* name, std::string message) {
+    if (option) *option = name;
+    return message;
+  };
   if (o.precision != Precision::f64)
-    return "precision float is not available in the cpsc102 profile (it computes in the course "
-           "program's own extended precision)";
+    return at("precision",
+              "precision float is not available in the cpsc102 profile (it computes in the "
+              "course program's own extended precision)");
   if (o.highlight != Highlight::phong)
-    return "highlight blinn is not available in the cpsc102 profile (its glint is the course "
-           "program's own)";
-  if (o.bailout > 0) return "bailout is not available in the cpsc102 profile";
+    return at("highlight",
+              "highlight blinn is not available in the cpsc102 profile (its glint is the course "
+              "program's own)");
+  if (o.bailout > 0) return at("bailout", "bailout is not available in the cpsc102 profile");
   if (o.seed > 0xffffffffULL)
-    return "seed must be below 2^32 in the cpsc102 profile (it seeds glibc's random())";
+    return at("seed", "seed must be below 2^32 in the cpsc102 profile (it seeds glibc's random())");
+  if (o.effective_max_depth() > kCpsc102MaxDepth)
+    return at("max_depth", "the cpsc102 profile follows rays at most " +
+                               std::to_string(kCpsc102MaxDepth) + " bounces deep; max_depth " +
+                               std::to_string(o.effective_max_depth()) + " is more");
   return {};
 }
 

@@ -191,6 +191,15 @@ bool is_valid_path(std::string_view path) {
   return path.find("//") == std::string_view::npos && is_valid_utf8(path);
 }
 
+Where AttrDesc::value_at(size_t i) const {
+  if (i >= value_where.size()) return where;
+  switch (value_where.json_mode()) {
+    case 1: return where;
+    case 2: return {0, 0, where.path + "/" + std::to_string(i)};
+    default: return value_where[i];
+  }
+}
+
 const AttrDesc* EntityDesc::find(std::string_view key) const {
   for (const AttrDesc& a : attrs)
     if (a.key == key) return &a;

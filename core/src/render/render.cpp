@@ -294,14 +294,6 @@ std::optional<int> check_render(const Scene& scene, const RenderOptions& options
     if (error) *error = conflict;
     return std::nullopt;
   }
-  if (options.profile == Profile::cpsc102 &&
-      options.effective_max_depth() > cpsc102::kMaxRecursion) {
-    if (error)
-      *error = "the cpsc102 profile follows rays at most " +
-               std::to_string(cpsc102::kMaxRecursion) + " bounces deep; max_depth " +
-               std::to_string(options.effective_max_depth()) + " is more";
-    return std::nullopt;
-  }
   return camera;
 }
 

@@ -67,7 +67,9 @@ class SceneBuilder {
     if (scene.cameras.empty() && !had_camera_)
       diags_.error("no-camera", "no camera: a scene needs at least one camera", {});
     RenderOptions scratch;
+    const size_t errors_before = diags_.error_count();
     apply_options(scratch, desc.render, diags_);
+    if (diags_.error_count() == errors_before) check_profile(desc.render, scratch);
     check_camera_option(desc.render);
     scene.render = desc.render;
     if (diags_.has_errors()) return std::nullopt;
@@ -82,7 +84,7 @@ class SceneBuilder {
     diags_.error("undefined-material",
                  undefined_message("material", a.word, in,
                                    names_[static_cast<int>(EntityKind::material)]),
-                 a.value_where.empty() ? a.where : a.value_where[0]);
+                 a.value_at(0));
     return std::nullopt;
   }
 
@@ -91,7 +93,7 @@ class SceneBuilder {
     if (auto it = texture_index_.find(a.word); it != texture_index_.end()) return it->second;
     if (names_[static_cast<int>(EntityKind::texture)].count(a.word))
       return std::nullopt;  // defined but broken: reported
-    const Where where = a.value_where.empty() ? a.where : a.value_where[0];
+    const Where where = a.value_at(0);
     if (!is_valid_path(a.word)) {
       diags_.error("bad-path", "'" + a.key + "' is neither a texture's name nor a file path",
                    where);
@@ -121,9 +123,20 @@ class SceneBuilder {
     if (!path || texture_index_.count(e.name)) return;
     const AttrDesc* a = e.find("filename");
     texture_index_[e.name] = static_cast<int>(scene.textures.size());
-    scene.textures.push_back({e.name, e.where, *path, a->value_where.empty() ? a->where
-                                                                              : a->value_where[0],
-                              nullptr});
+    scene.textures.push_back({e.name, e.where, *path, a->value_at(0), nullptr});
+  }
+
+  // The scene's own options must suit its own profile (a render then never refuses them),
+  // reported at the option at fault, else at the profile's.
+  void check_profile(const OptionSet& render, const RenderOptions& options) {
+    std::string option;
+    const std::string conflict = profile_conflict(options, &option);
+    if (conflict.empty()) return;
+    Where where;
+    for (const OptionValue& v : render)
+      if (v.name == option || (where.path.empty() && where.line == 0 && v.name == "profile"))
+        where = v.where;
+    diags_.error("bad-option", conflict, where);
   }
 
   // The scene's own "camera" option must name one of its cameras.
@@ -219,7 +232,7 @@ std::optional<SmallVec<double, 3>> EntityReader::numbers(std::string_view key) {
   bool ok = true;
   for (size_t i = 0; i < a->numbers.size(); ++i)
     if (auto problem = value_problem(*spec, a->numbers[i]); !problem.empty()) {
-      Where w = i < a->value_where.size() ? a->value_where[i] : a->where;
+      const Where w = a->value_at(i);
       diags_.error("out-of-range",
                    "'" + a->key + "' " + problem + ", got " + format_number(a->numbers[i]), w);
       ok = false;

@@ -14,8 +14,8 @@
 namespace rayfarm::cpsc102 {
 
 // The program recursed for every reflected and transmitted ray; so does this tracer, up to
-// this depth (a thread's stack holds it with room to spare).
-inline constexpr int kMaxRecursion = 1000;
+// this depth (options.h).
+inline constexpr int kMaxRecursion = kCpsc102MaxDepth;
 // Rays one primary ray may spawn: reflection and transmission together branch, so a scene
 // of translucent mirrors would otherwise double its rays at every bounce.
 inline constexpr int kMaxRaysPerPixel = 1 << 14;
