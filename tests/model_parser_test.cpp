@@ -527,6 +527,31 @@ TEST(ModelParser, ReportsAMissingMaterialName) {
   for (const Diagnostic& e : errors) EXPECT_FALSE(has_text(e.message, "'material' ("));
 }
 
+// A JSON scene may name a material "radius"; its model file must read back. The word after
+// `material` is then the name, unless that word's own value follows it (the name left out).
+TEST(ModelParser, AMaterialNamedLikeAnAttributeIsAName) {
+  for (const bool fast : {false, true}) {
+    SCOPED_TRACE(fast ? "the fast loader" : "the described scene");
+    const std::string text = with_head(
+        "material radius { ambient 1 }\nmaterial normal { ambient .5 }\n"
+        "material texname { ambient .2 }\n"
+        "sphere s { material radius center 0 0 -5 radius 1 }\n"
+        "plane p { material normal normal 0 1 0 point 0 0 0 }\n"
+        "sphere t { center 0 2 -5 radius 1 material texname }\n");
+    LoadedScene loaded = load_scene(text, fast ? LoadDetail::scene : LoadDetail::full);
+    ASSERT_TRUE(loaded.scene) << dump(loaded.diags);
+    const Scene& scene = *loaded.scene;
+    ASSERT_EQ(scene.objects.size(), 3u);
+    EXPECT_EQ(scene.materials[scene.objects[0].material].name, "radius");
+    EXPECT_EQ(scene.materials[scene.objects[1].material].name, "normal");
+    EXPECT_EQ(scene.materials[scene.objects[2].material].name, "texname");
+  }
+  // Left out, it is one error, at the attribute that came instead.
+  const std::string line = "sphere s { material center 0 0 -5 radius 1 }";
+  EXPECT_TRUE(is_diag(single_error(line + "\n"), "missing-value", 3, column_of(line, "center"),
+                      "'material' needs a material name"));
+}
+
 TEST(ModelParser, ReportsAMaterialWithoutAName) {
   Diagnostic d = single_error("material { diffuse 1 }\n");
   EXPECT_TRUE(is_diag(d, "missing-name", 3, 1, "material needs a name: material NAME { ... }"));

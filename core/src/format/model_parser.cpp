@@ -259,8 +259,18 @@ class ModelParser {
       // with a digit or a dot). Either way not the next attribute or entity.
       const bool material = attr.kind == ValueKind::material_ref;
       const Token& v = lex_.peek();
-      if (v.kind != Token::word || (material && looks_like_value(v.text)) ||
-          (find_attr(spec, v.text) && lex_.peek(1).kind == Token::word) ||
+      // An attribute's keyword with that attribute's value after it ("material center 1 2 3")
+      // is the next attribute, the name left out. Without one ("material radius center ..."),
+      // it is a name: JSON scenes may name a material "radius", and the course's program read
+      // whatever word came.
+      bool next_attribute = false;
+      if (const AttrSpec* next = find_attr(spec, v.text);
+          next && v.kind == Token::word && lex_.peek(1).kind == Token::word) {
+        const std::string_view after = lex_.peek(1).text;
+        next_attribute = is_word_kind(next->kind) ? !find_attr(spec, after) && !find_entity(after)
+                                                  : looks_like_value(after);
+      }
+      if (v.kind != Token::word || (material && looks_like_value(v.text)) || next_attribute ||
           (find_entity(v.text) && starts_entity(1))) {
         diags_.error("missing-value",
                      "'" + a.key + "' needs " + (material ? "a material name" : describe(attr)),
