@@ -178,6 +178,24 @@ TEST(Triangle, VerticesAreProjectedAlongTheNormalIntoItsPlane) {
     triangle { material m normal 0 0 1 point 0 0 -5 vertex1 1 -3 -1 vertex2 1 5 -9 vertex3 4 1 -5 })")));
 }
 
+// Whether three points make a triangle does not depend on the scale they are written at.
+TEST(Triangle, HasAnAreaAtAnyScale) {
+  for (const char* scale : {"1e-100", "1e-10", "1", "1e100", "1e154", "1e300"}) {
+    SCOPED_TRACE(scale);
+    const std::string s(scale);
+    const std::string text = kCamera + "material m { ambient 1 }\n"
+                             "tri t { material m v0 -" + s + " -" + s + " -5 v1 " + s + " -" + s +
+                             " -5 v2 0 " + s + " -5 }\n"
+                             "tri line { material m v0 -" + s + " -" + s + " -5 v1 0 0 -5 v2 " + s +
+                             " " + s + " -5 }\n";
+    LoadedScene loaded = load_scene(text);
+    std::vector<std::string> degenerate;
+    for (const Diagnostic& d : loaded.diags.items())
+      if (d.code == "degenerate") degenerate.push_back(d.message.substr(0, 10));
+    EXPECT_EQ(degenerate, std::vector<std::string>{"tri 'line'"});
+  }
+}
+
 TEST(Tri, LiesInThePlaneThroughItsVertices) {
   // v0 v1 v2 span the plane z = −5 + (y − 1)/2, normal (v1 − v0) × (v2 − v1) ∝ (0, −1, 2).
   // Pixel (x, y) meets it s = 10/(5 + (y − 1)/2) times (x − 1, y − 1, −5) from the eye;

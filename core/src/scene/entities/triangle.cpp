@@ -1,4 +1,7 @@
 // triangle (with or without its plane) and the 2009 course's tri (v0 v1 v2).
+#include <algorithm>
+#include <cmath>
+
 #include <glm/geometric.hpp>
 
 #include "scene/entities/plane_parts.h"
@@ -24,7 +27,15 @@ constexpr AttrSpec kTriAttrs[] = {
 
 // Whether the triangle has an area: in its own plane, or projected into the given one.
 bool has_area(const Triangle& t) {
-  const glm::dvec3 e1 = t.vertex[1] - t.vertex[0], e2 = t.vertex[2] - t.vertex[0];
+  glm::dvec3 e1 = t.vertex[1] - t.vertex[0], e2 = t.vertex[2] - t.vertex[0];
+  // At a scale near 1 first: the test is a ratio, and at 1e154 or 1e-100 the products below
+  // would overflow or underflow and call any triangle a line.
+  const double most = std::max({std::abs(e1.x), std::abs(e1.y), std::abs(e1.z), std::abs(e2.x),
+                                std::abs(e2.y), std::abs(e2.z)});
+  if (most > 0 && std::isfinite(most)) {
+    e1 /= most;
+    e2 /= most;
+  }
   glm::dvec3 c = glm::cross(e1, e2);
   if (t.plane) c = glm::dot(c, unit_direction(t.plane->normal)) * unit_direction(t.plane->normal);
   const double scale = glm::length(e1) * glm::length(e2);
