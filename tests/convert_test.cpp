@@ -314,6 +314,18 @@ TEST(Convert, HandlesFiftyThousandMaterialsInLinearTime) {
 
 // --- POV-Ray --------------------------------------------------------------------------------
 
+// A texture's path is a POV-Ray string: escaped, and its image type by its extension.
+TEST(Convert, ExportsATexturePathAsAnEscapedPovString) {
+  const Scene scene = build(model_desc(std::string(kLecture) +
+                                       "texplane wall { material floor normal 0 0 1 point 0 0 -9 "
+                                       "xdir 1 0 0 dimensions 4 4 texname a\"b\\c.PNG mode 0 }\n"
+                                       "texplane floor2 { material floor normal 0 1 0 point 0 -9 0 "
+                                       "xdir 1 0 0 dimensions 4 4 texname plain.ppm mode 0 }\n"));
+  const std::string pov = write_pov(scene, RenderOptions{});
+  EXPECT_TRUE(contains(pov, R"(image_map { png "a\"b\\c.PNG" once })")) << pov;
+  EXPECT_TRUE(contains(pov, R"(image_map { ppm "plain.ppm" once })")) << pov;
+}
+
 TEST(Convert, ExportsTheCameraToPovWithZNegated) {
   std::string pov = write_pov(build(model_desc(kLecture)), RenderOptions{});
   EXPECT_TRUE(contains(pov, "#version 3.7;")) << pov;

@@ -29,6 +29,18 @@ struct PovWriter {
   static std::string texture(int material) {
     return "texture { M" + std::to_string(material) + " }";
   }
+  // An image file for image_map: its type by its extension, the path a POV-Ray string
+  // (a '"' or '\\' in it escaped, so that no path can end the string and write SDL).
+  static std::string image_file(const std::string& path) {
+    std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : "";
+    for (char& c : ext) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+    std::string out = ext == ".png" ? "png \"" : "ppm \"";
+    for (char c : path) {
+      if (c == '"' || c == '\\') out += '\\';
+      out += c;
+    }
+    return out + "\"";
+  }
 };
 
 }  // namespace rayfarm

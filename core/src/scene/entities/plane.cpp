@@ -167,8 +167,8 @@ void pov_texplane(PovWriter& w, int index) {
                    p = PovWriter::flip(c[0]);
   const glm::dvec3 n = glm::cross(a, b);
   pov_polygon(w, t.plane, t.window);
-  w.out << " texture { M" << o.material << " } texture { pigment { image_map { ppm \""
-        << w.scene.textures[t.texture].path << "\" once } matrix <" << w.num(a.x)
+  w.out << " texture { M" << o.material << " } texture { pigment { image_map { "
+        << PovWriter::image_file(w.scene.textures[t.texture].path) << " once } matrix <" << w.num(a.x)
         << ", " << w.num(a.y) << ", " << w.num(a.z) << ", " << w.num(b.x) << ", " << w.num(b.y)
         << ", " << w.num(b.z) << ", " << w.num(n.x) << ", " << w.num(n.y) << ", " << w.num(n.z)
         << ", " << w.num(p.x) << ", " << w.num(p.y) << ", " << w.num(p.z)
