@@ -552,6 +552,31 @@ TEST(ModelParser, AMaterialNamedLikeAnAttributeIsAName) {
                       "'material' needs a material name"));
 }
 
+// A character that looks like a space or like nothing (pasted from a document) is named, and
+// the keyword it spoils is not also "missing": one error for one mistake.
+TEST(ModelParser, NamesAnInvisibleCharacterInAKeyword) {
+  const struct {
+    const char* body;
+    const char* code;
+    const char* named;
+    const char* hint;
+  } cases[] = {
+      {"sphere s { material m center 0 0 -5 radius\xc2\xa0" "1 }\n", "unknown-attribute",
+       "U+00A0 (a no-break space)", "radius"},
+      {"sphere s { material m center 0 0 -5 \xe2\x80\x8bradius 1 }\n", "unknown-attribute",
+       "U+200B (a zero-width space)", "radius"},
+      {"\xef\xbb\xbfsphere s { material m center 0 0 -5 radius 1 }\n", "unknown-entity",
+       "U+FEFF (a byte-order mark)", "sphere"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.body);
+    const Diagnostic d = single_error(c.body);
+    EXPECT_EQ(d.code, c.code);
+    EXPECT_TRUE(has_text(d.message, c.named)) << d.message;
+    EXPECT_TRUE(has_text(d.message, std::string("(did you mean '") + c.hint + "'?)")) << d.message;
+  }
+}
+
 TEST(ModelParser, ReportsAMaterialWithoutAName) {
   Diagnostic d = single_error("material { diffuse 1 }\n");
   EXPECT_TRUE(is_diag(d, "missing-name", 3, 1, "material needs a name: material NAME { ... }"));

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "format/model_lexer.h"
+#include "util/utf8.h"
 #include "util/count_byte.h"
 #include "rayfarm/schema.h"
 
@@ -32,6 +33,37 @@ std::vector<std::string_view> attr_names(const EntitySpec& spec) {
 std::string with_hint(std::string message, const std::string& hint) {
   if (!hint.empty()) message += " (did you mean '" + hint + "'?)";
   return message;
+}
+
+// A word that is not the keyword it shows because of a character that looks like a space or
+// like nothing: that character named, and the keyword the text before it is (if any).
+struct Unseen {
+  std::string note;  // "; it has U+00A0 (a no-break space) in it: ..." or empty
+  std::string without;  // the word without such characters ("radius" of "radius\u200b")
+  std::string before;   // the word up to the first ("radius" of "radius\u00a01")
+  // The keyword it was meant to be, by `is_keyword`; empty if neither reading is one.
+  template <class IsKeyword>
+  std::string keyword(IsKeyword is_keyword) const {
+    return is_keyword(without) ? without : is_keyword(before) ? before : std::string();
+  }
+};
+Unseen unseen(std::string_view word) {
+  const Invisible first = find_invisible(word);
+  if (first.at == std::string_view::npos) return {};
+  Unseen u;
+  u.note = "; it has " + first.name() + " in it, which looks like a space or nothing but is " +
+           "neither: retype it";
+  u.before = std::string(word.substr(0, first.at));
+  for (size_t i = 0; i < word.size();) {
+    const Invisible c = find_invisible(word.substr(i));
+    if (c.at == std::string_view::npos) {
+      u.without += word.substr(i);
+      break;
+    }
+    u.without += word.substr(i, c.at);
+    i += c.at + utf8_length(word, i + c.at);
+  }
+  return u;
 }
 
 // An entity whose body could not be read: every attribute counts as written-but-bad, so the
@@ -84,12 +116,15 @@ class ModelParser {
       if (lex_.peek().kind == Token::open) skip_block();
       return std::nullopt;
     }
-    std::string hint = nearest_word(t.text, entity_keywords());
+    const Unseen odd = unseen(t.text);
+    std::string hint = odd.keyword([](const std::string& w) { return find_entity(w) != nullptr; });
+    if (hint.empty()) hint = nearest_word(t.text, entity_keywords());
     std::string what = looks_like_value(t.text)
                            ? "unexpected value " + quoted(t.text) + " outside an entity"
                            : "unknown entity " + quoted(t.text);
     diags_.error("unknown-entity",
-                 with_hint(what + "; expected one of: " + std::string(entity_keyword_list()),
+                 with_hint(what + odd.note + "; expected one of: " +
+                               std::string(entity_keyword_list()),
                            hint),
                  at(t));
     std::optional<EntityDesc> stand_in;
@@ -228,10 +263,13 @@ class ModelParser {
                        ": every value follows an attribute (" + list + ")",
                    at(t));
     } else {
-      std::string hint = nearest_word(t.text, attr_names(spec));
+      const Unseen odd = unseen(t.text);
+      std::string hint =
+          odd.keyword([&](const std::string& w) { return find_attr(spec, w) != nullptr; });
+      if (hint.empty()) hint = nearest_word(t.text, attr_names(spec));
       diags_.error("unknown-attribute",
                    with_hint("unknown attribute " + quoted(t.text) + " for " + describe_entity(e) +
-                                 " (attributes: " + list + ")",
+                                 odd.note + " (attributes: " + list + ")",
                              hint),
                    at(t));
       // The attribute it was meant to be is then not also "missing".

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdio>
+#include <string>
 #include <string_view>
 
 namespace rayfarm {
@@ -20,6 +22,42 @@ inline std::size_t utf8_length(std::string_view s, std::size_t i) {
       (c == 0xf4 && c1 > 0x8f))
     return 0;
   return n;
+}
+
+// A character that is not ASCII but looks like white space or like nothing at all (pasted from
+// a document or a web page): a no-break space, the Unicode spaces, zero-width characters, a
+// byte-order mark. Found in a word, it is why the word is not the keyword it shows.
+struct Invisible {
+  std::size_t at = std::string_view::npos;  // byte offset of the first one
+  unsigned code = 0;
+  std::string name() const {  // "U+00A0 (a no-break space)"
+    char hex[16];
+    std::snprintf(hex, sizeof hex, "U+%04X", code);
+    const char* what = code == 0xA0                      ? " (a no-break space)"
+                       : code == 0x200B                  ? " (a zero-width space)"
+                       : code == 0xFEFF                  ? " (a byte-order mark)"
+                       : code == 0x202F                  ? " (a narrow no-break space)"
+                       : code >= 0x200C && code <= 0x2060 ? " (an invisible character)"
+                                                          : " (a Unicode space)";
+    return hex + std::string(what);
+  }
+};
+
+inline Invisible find_invisible(std::string_view s) {
+  for (std::size_t i = 0; i < s.size();) {
+    const std::size_t n = static_cast<unsigned char>(s[i]) < 0x80 ? 1 : utf8_length(s, i);
+    if (n <= 1) {
+      ++i;
+      continue;
+    }
+    unsigned code = static_cast<unsigned char>(s[i]) & (0x7Fu >> n);
+    for (std::size_t k = 1; k < n; ++k) code = (code << 6) | (static_cast<unsigned char>(s[i + k]) & 0x3Fu);
+    if (code == 0xA0 || (code >= 0x2000 && code <= 0x200D) || code == 0x2028 || code == 0x2029 ||
+        code == 0x202F || code == 0x205F || code == 0x2060 || code == 0x3000 || code == 0xFEFF)
+      return {i, code};
+    i += n;
+  }
+  return {};
 }
 
 inline bool is_valid_utf8(std::string_view s) {
