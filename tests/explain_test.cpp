@@ -135,6 +135,38 @@ sphere ball { material glossy center 1 1 -5 radius 2 }
 sphere blocker { material dark center 0 1 -2 radius .3 }
 )";
 
+// The lecture's highlight raises max(0, R·V): a light past the mirror direction adds no glint,
+// and the explanation shows the 0 that was raised, not the negative R·V.
+TEST(Explain, TheHighlightBaseIsWhatIsRaised) {
+  // A lamp at the eye: N·L = N·V > 0 wherever the ball is seen, and R·V = 2(N·V)² − 1 < 0
+  // on its outer ring (the view more than 45° off the normal).
+  const Scene scene = test::scene_from(R"(
+camera c { pixeldim 24 24 worlddim 8 8 viewpoint 4 4 5 }
+material glossy { ambient .2 diffuse .5 specular .5 shininess 4 }
+light lamp { location 4 4 5 emissivity 2 }
+sphere ball { material glossy center 4 4 -5 radius 3.5 }
+)");
+  int lit = 0, clamped = 0;
+  for (int y = 0; y < 24; ++y)
+    for (int x = 0; x < 24; ++x) {
+      std::string error;
+      const auto e = explain_pixel(scene, {}, x, y, &error);
+      ASSERT_TRUE(e) << error;
+      for (const PathHit& h : e->samples[0].hits)
+        for (const LightTerm& l : h.lights) {
+          if (l.status != "lit") continue;
+          ++lit;
+          EXPECT_GE(l.highlight_base, 0) << x << "," << y;
+          if (l.highlight_base == 0) {
+            ++clamped;
+            EXPECT_EQ(l.specular, (Triple{0, 0, 0})) << x << "," << y;
+          }
+        }
+    }
+  EXPECT_GT(lit, 0);
+  EXPECT_GT(clamped, 0) << "no light past a mirror direction: the test shows nothing";
+}
+
 TEST(Explain, TheLecturesTermsAreTheHandComputedOnes) {
   const Scene scene = test::scene_from(kHandScene);
   std::string error;

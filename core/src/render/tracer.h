@@ -798,7 +798,7 @@ class Tracer {
         const T b = base > 0 ? base : T(0);
         if (!highlight_negligible(m, b, term)) term += m.specular * std::pow(b, m.shininess);
         if (lr) {
-          lr->highlight_base = static_cast<double>(base);
+          lr->highlight_base = static_cast<double>(b);  // what is raised, as recorder.h says
           lr->specular = triple(e * (m.specular * std::pow(b, m.shininess)));
         }
       }
