@@ -25,9 +25,12 @@ Runner add_trace(CLI::App& app) {
   // Decimal digits only: the library's own integer reading takes 010 for 8 and 0x10 for 16.
   const CLI::Validator decimal(
       [](std::string& s) -> std::string {
-        const bool digits = !s.empty() && s.size() <= 9 &&
-                            s.find_first_not_of("0123456789") == std::string::npos;
-        return digits ? "" : "'" + s.substr(0, 40) + "' is not a pixel number (decimal digits, from 0)";
+        const bool digits = !s.empty() && s.find_first_not_of("0123456789") == std::string::npos;
+        if (!digits) return "'" + s.substr(0, 40) + "' is not a pixel number (decimal digits, from 0)";
+        // No image has a pixel past 65534 (the explanation then says the image's size).
+        if (s.find_first_not_of('0') != std::string::npos && s.size() - s.find_first_not_of('0') > 5)
+          return "'" + s.substr(0, 40) + "' is past every image: images are at most 65535 pixels wide or high";
+        return "";
       },
       "PIXEL");
   app.add_option("x", args->x, "pixel column, 0 at the left")->required()->check(decimal);

@@ -480,6 +480,9 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
   // A pixel is decimal: 010 is pixel 10 (not octal 8), 0x10 is refused.
   usage("trace " + scene + " 0x10 1", "x: '0x10' is not a pixel number (decimal digits, from 0)");
   EXPECT_EQ(run(kRayfarm + " trace " + scene + " 010 0").out.rfind("Pixel (10, 0) of ", 0), 0u);
+  // Too large for any image is said so, not "not a number".
+  usage("trace " + scene + " 1 4294967296",
+        "y: '4294967296' is past every image: images are at most 65535 pixels wide or high");
   usage("convert " + scene + " --to json --camera nosuch", "error: no camera named 'nosuch'");
   usage("convert " + scene + " --to pov --spp 8",
         "--to pov cannot use --spp: the POV-Ray file takes --camera, --width, --height, "
