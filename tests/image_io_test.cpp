@@ -194,13 +194,14 @@ TEST(ImageIo, TruncatedPpmDataReportsWhatWasMissing) {
 TEST(ImageIo, MalformedPpmHeadersAreErrors) {
   EXPECT_EQ(decode_error("P6"), "truncated PPM header: no width");
   EXPECT_EQ(decode_error("P6\n4 4\n"), "truncated PPM header: no maxval");
-  EXPECT_EQ(decode_error("P6\nabc 2 255\n"), "bad PPM header: width is not a number");
-  EXPECT_EQ(decode_error("P6\n2 -2 255\n"), "bad PPM header: height is not a number");
-  EXPECT_EQ(decode_error("P6\n2 2x 255\n"), "bad PPM header: height is not a number");
+  EXPECT_EQ(decode_error("P6\nabc 2 255\n"), "bad PPM header: width 'abc' is not a whole number");
+  EXPECT_EQ(decode_error("P6\n2 -2 255\n"), "bad PPM header: height '-2' is not a whole number");
+  EXPECT_EQ(decode_error("P6\n2 2x 255\n"), "bad PPM header: height '2x' is not a whole number");
   EXPECT_EQ(decode_error("P612 2 255\n"), "bad PPM header: no whitespace after P6");
   EXPECT_EQ(decode_error("P6 1 1 0\n"), "bad PPM header: maxval 0 is not in 1..65535");
   EXPECT_EQ(decode_error("P6 1 1 65536\n"), "bad PPM header: maxval 65536 is not in 1..65535");
-  EXPECT_EQ(decode_error("P3 1 1 255 1 2 x"), "bad PPM data: sample 3 is not a number");
+  EXPECT_EQ(decode_error("P3 1 1 255 1 2 x"), "bad PPM data: sample 3, 'x', is not a whole number");
+  EXPECT_EQ(decode_error("P3 1 1 255 -1 2 3"), "bad PPM data: sample 1, '-1', is not a whole number");
   EXPECT_EQ(decode_error("P3 1 1 200 1 2 201"), "PPM sample 201 exceeds maxval 200");
   EXPECT_EQ(decode_error("P6 1 1 9\n\x01\x02\x0a"), "PPM sample 10 exceeds maxval 9");
   EXPECT_EQ(decode_error("P5 1 1 255\n\x01"),
@@ -213,7 +214,9 @@ TEST(ImageIo, ZeroAndOversizedDimensionsAreRefusedBeforeAllocating) {
   EXPECT_EQ(decode_error("P6 100000 100000 255\n"),
             "image too large: 100000x100000 is over the limit of 67108864 pixels");
   EXPECT_EQ(decode_error("P6 99999999999999999999999 99999999999999999999999 255\n"),
-            "image too large: 4294967295x4294967295 is over the limit of 67108864 pixels");
+            "bad PPM header: width '99999999999999999999...' is far too large");
+  EXPECT_EQ(decode_error("P6 4294967297 1 255\n"),
+            "bad PPM header: width '4294967297' is far too large");
   EXPECT_EQ(decode_error(make_png(65535, 65535, 8, 2, "")),
             "image too large: 65535x65535 is over the limit of 67108864 pixels");
   EXPECT_EQ(decode_error(make_png(0, 1, 8, 2, "")), "image has no pixels (0x1)");

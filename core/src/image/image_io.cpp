@@ -112,7 +112,13 @@ bool is_space(char c) {
 struct PpmNumber {
   enum Kind { ok, missing, malformed } kind;
   std::uint64_t value;  // saturates at UINT32_MAX, so that width * height cannot overflow
+  std::string_view text = {};  // as written (up to white space), for messages
 };
+
+// A token for a message: at most 20 characters.
+std::string shown(std::string_view text) {
+  return "'" + std::string(text.substr(0, 20)) + (text.size() > 20 ? "...'" : "'");
+}
 
 PpmNumber read_number(std::string_view s, std::size_t& pos) {
   while (pos < s.size() && (is_space(s[pos]) || s[pos] == '#')) {
@@ -128,10 +134,11 @@ PpmNumber read_number(std::string_view s, std::size_t& pos) {
   for (; pos < s.size() && s[pos] >= '0' && s[pos] <= '9'; ++pos) {
     value = std::min<std::uint64_t>(value * 10 + (s[pos] - '0'), UINT32_MAX);
   }
-  if (pos == start || (pos < s.size() && !is_space(s[pos]) && s[pos] != '#')) {
-    return {PpmNumber::malformed, 0};
-  }
-  return {PpmNumber::ok, value};
+  std::size_t end = pos;
+  while (end < s.size() && !is_space(s[end]) && s[end] != '#') ++end;
+  const std::string_view text = s.substr(start, end - start);
+  if (pos == start || pos != end) return {PpmNumber::malformed, 0, text};
+  return {PpmNumber::ok, value, text};
 }
 
 std::optional<Image> decode_ppm(std::string_view s, std::string* error, long long max_pixels) {
@@ -148,8 +155,12 @@ std::optional<Image> decode_ppm(std::string_view s, std::string* error, long lon
       return fail(error, std::string("truncated PPM header: no ") + names[i]);
     }
     if (number.kind == PpmNumber::malformed) {
-      return fail(error, std::string("bad PPM header: ") + names[i] + " is not a number");
+      return fail(error, std::string("bad PPM header: ") + names[i] + " " + shown(number.text) +
+                             " is not a whole number");
     }
+    if (number.value == UINT32_MAX && i < 2)  // saturated: the size message would be wrong
+      return fail(error, std::string("bad PPM header: ") + names[i] + " " + shown(number.text) +
+                             " is far too large");
     fields[i] = number.value;
   }
   std::uint64_t width = fields[0], height = fields[1], maxval = fields[2];
@@ -178,8 +189,8 @@ std::optional<Image> decode_ppm(std::string_view s, std::string* error, long lon
                                " samples, got " + std::to_string(image.rgb.size()));
       }
       if (number.kind == PpmNumber::malformed) {
-        return fail(error, "bad PPM data: sample " + std::to_string(image.rgb.size() + 1) +
-                               " is not a number");
+        return fail(error, "bad PPM data: sample " + std::to_string(image.rgb.size() + 1) + ", " +
+                               shown(number.text) + ", is not a whole number");
       }
       if (number.value > maxval) return too_big(number.value);
       image.rgb.push_back(to_8bit[number.value]);
