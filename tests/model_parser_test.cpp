@@ -366,6 +366,11 @@ TEST(ModelParser, ReportsOutOfRangeValuesAtTheValue) {
   const OutOfRange cases[] = {
       {"sphere s { material m center 0 0 -5 radius 0 }", "0 }", "'radius' must be > 0, got 0"},
       {"sphere s { material m center 0 0 -5 radius -1 }", "-1", "'radius' must be > 0, got -1"},
+      // A radius whose square overflows would make the sphere vanish, not fill the view.
+      {"sphere s { material m center 0 0 -5 radius 1e151 }", "1e151",
+       "'radius' must be at most 1e150 (its square must fit a double), got 1e+151"},
+      {"revsurf r { material m surfer 1 base 0 0 -5 direction 0 1 0 height 2e150 }", "2e150",
+       "'height' must be at most 1e150"},
       {"material k { ambient 1 -0.5 1 }", "-0.5", "'ambient' values must be >= 0, got -0.5"},
       {"material k { diffuse -1 }", "-1", "'diffuse' values must be >= 0, got -1"},
       {"material k { shininess -1 }", "-1", "'shininess' must be >= 0, got -1"},

@@ -17,7 +17,7 @@ enum class ValueKind {
   window_dims,   // 2 numbers > 0
   point,         // 3 numbers
   colour,        // 3 numbers >= 0, or 1 meaning all three
-  positive,      // 1 number > 0
+  positive,      // 1 number > 0 and at most kMaxLength (a radius, a height)
   nonnegative,   // 1 number >= 0
   fraction,      // 1 number in [0, 1]
   angle,         // 1 number of degrees in (0, 180)
@@ -26,6 +26,10 @@ enum class ValueKind {
   material_ref,  // a material name
   word,          // a texture name or a file path: any word
 };
+
+// The largest radius or height: its square, which the hit tests compute, must fit a double
+// (a sphere of radius 1e160 would vanish rather than fill the view).
+inline constexpr double kMaxLength = 1e150;
 
 struct AttrSpec {
   std::string_view key;

@@ -101,8 +101,8 @@ bool value_in_range(const AttrSpec& attr, double v) {
   if (!std::isfinite(v)) return false;
   switch (attr.kind) {
     case V::pixel_dims: return v >= 1 && v <= 65535 && v == std::floor(v);
-    case V::window_dims:
-    case V::positive: return v > 0;
+    case V::window_dims: return v > 0;
+    case V::positive: return v > 0 && v <= kMaxLength;
     case V::colour:
     case V::nonnegative: return v >= 0;
     case V::fraction: return v >= 0 && v <= 1;
@@ -126,6 +126,7 @@ std::string value_problem(const AttrSpec& attr, double v) {
       break;
     case V::positive:
       if (!(v > 0)) return "must be > 0";
+      if (v > kMaxLength) return "must be at most 1e150 (its square must fit a double)";
       break;
     case V::nonnegative:
       if (v < 0) return "must be >= 0";
