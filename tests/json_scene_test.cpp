@@ -13,6 +13,7 @@
 
 #include "rayfarm/load.h"
 #include "test_util.h"
+#include "util/lines.h"
 
 namespace rayfarm {
 namespace {
@@ -559,8 +560,7 @@ TEST(JsonScene, ReportsARenderSectionThatIsNotAnObject) {
 // --- Hostile input --------------------------------------------------------------------------
 
 void expect_sane(std::string_view text, const LoadedScene& loaded) {
-  int lines = 1;
-  for (char c : text) lines += c == '\n';
+  const int lines = 1 + static_cast<int>(count_lines(text));  // as util/lines.h counts them
   EXPECT_LE(loaded.diags.items().size(), 2 * Diagnostics::kMaxErrors);
   for (const Diagnostic& d : loaded.diags.items()) {
     EXPECT_FALSE(d.code.empty());

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "rayfarm/load.h"
+#include "util/lines.h"
 
 namespace rayfarm {
 namespace {
@@ -815,6 +816,23 @@ TEST(ModelParser, ReadsCrlfLineEndingsAndReportsTheirPositions) {
   EXPECT_TRUE(is_diag(d, "unknown-attribute", 8, 3, "did you mean 'diffuse'?"));
 }
 
+// Old Mac files end lines with '\r' alone: a comment ends there, and places count lines.
+TEST(ModelParser, ReadsCrOnlyLineEndingsAndReportsTheirPositions) {
+  Scene s = scene_of(
+      "# a comment\rcamera c\r{\r pixeldim 8 6\r worlddim 8 6\r viewpoint 4 3 5\r}\r"
+      "material m # comment\r{ diffuse 1 }\r");
+  EXPECT_EQ(s.cameras[0].viewpoint.z, 5.0);
+  EXPECT_EQ(s.materials.size(), 1u);
+  const std::string text =
+      "camera c\r{\r pixeldim 8 6\r worlddim 8 6\r viewpoint 4 3 5\r}\r"
+      "material m\r{ difuse 1 }\r";
+  Diagnostic d = single_error_of_file(text);
+  EXPECT_TRUE(is_diag(d, "unknown-attribute", 8, 3, "did you mean 'diffuse'?"));
+  // The excerpt is that line alone.
+  EXPECT_TRUE(has_text(format_diagnostic(d, "old.txt", text), "\n  { difuse 1 }\n    ^\n"))
+      << format_diagnostic(d, "old.txt", text);
+}
+
 TEST(ModelParser, SkipsAByteOrderMarkAndCountsColumnsAfterIt) {
   std::string bom = "\xEF\xBB\xBF";
   Scene s = scene_of(bom + with_head("sphere s { material m center 0 0 -5 radius 1 }\n"));
@@ -882,8 +900,7 @@ TEST(ModelParser, KeepsControlBytesOutOfMessages) {
 
 // Every diagnostic of `text` points inside it (or nowhere) and is one printable line.
 void expect_sane(std::string_view text, const LoadedScene& loaded) {
-  int lines = 1;
-  for (char c : text) lines += c == '\n';
+  const int lines = 1 + static_cast<int>(count_lines(text));  // as util/lines.h counts them
   EXPECT_LE(loaded.diags.items().size(), 2 * Diagnostics::kMaxErrors);
   for (const Diagnostic& d : loaded.diags.items()) {
     EXPECT_FALSE(d.code.empty());

@@ -1,6 +1,8 @@
 // The course program's view of a model file: fscanf words and number prefixes.
 #include "analysis/course_stream.h"
 
+#include "util/lines.h"
+
 namespace rayfarm::course {
 
 Stream::Stream(std::string_view text) : text_(text) {
@@ -9,7 +11,7 @@ Stream::Stream(std::string_view text) : text_(text) {
 
 void Stream::advance(size_t n) {
   for (const size_t end = pos_ + n; pos_ < end && pos_ < text_.size(); ++pos_)
-    if (text_[pos_] == '\n') {
+    if (ends_line(text_, pos_)) {
       ++line_;
       line_start_ = pos_ + 1;
     }
@@ -27,7 +29,7 @@ Word Stream::peek() {
 void Stream::take(size_t n) { advance(n); }
 
 void Stream::skip_line() {
-  size_t end = text_.find('\n', pos_);
+  size_t end = find_line_end(text_, pos_);
   advance((end == std::string_view::npos ? text_.size() : end) - pos_);
 }
 

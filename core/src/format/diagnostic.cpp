@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <sstream>
 
+#include "util/lines.h"
 #include "util/utf8.h"
 
 namespace rayfarm {
@@ -80,11 +81,11 @@ namespace {
 std::string_view source_line(std::string_view source, int line) {
   size_t start = 0;
   for (int l = 1; l < line; ++l) {
-    size_t nl = source.find('\n', start);
+    size_t nl = find_line_end(source, start);
     if (nl == std::string_view::npos) return {};
     start = nl + 1;
   }
-  size_t end = source.find('\n', start);
+  size_t end = find_line_end(source, start);
   std::string_view text =
       source.substr(start, end == std::string_view::npos ? source.size() - start : end - start);
   if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
@@ -152,7 +153,7 @@ Where position_of_offset(std::string_view text, size_t offset) {
   Where w{1, 1, {}};
   size_t start = text.starts_with("\xEF\xBB\xBF") ? 3 : 0;  // a byte-order mark takes no column
   for (size_t i = start; i < offset && i < text.size(); ++i) {
-    if (text[i] == '\n') {
+    if (ends_line(text, i)) {
       ++w.line;
       w.column = 1;
     } else {

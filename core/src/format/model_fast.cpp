@@ -16,6 +16,7 @@
 
 #include "format/model_lexer.h"
 #include "util/count_byte.h"
+#include "util/lines.h"
 #include "util/name_set.h"
 #include "rayfarm/model_parser.h"
 #include "rayfarm/schema.h"
@@ -291,7 +292,7 @@ size_t split_point(std::string_view text) {
 std::optional<Scene> load_model_fast(std::string_view text, std::size_t parallel_min) {
   if (text.size() >= parallel_min && std::thread::hardware_concurrency() > 1) {
     if (const size_t cut = split_point(text); cut != std::string_view::npos) {
-      const int line = 1 + static_cast<int>(count_byte(text.substr(0, cut), '\n'));
+      const int line = 1 + static_cast<int>(count_lines(text.substr(0, cut)));
       FastLoader head(text.substr(0, cut)), tail(text.substr(cut), line);
       bool tail_ok = false;
       // The tail's objects will be moved into room the head reserved and has not touched:

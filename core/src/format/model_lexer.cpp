@@ -1,6 +1,8 @@
 // Model-file lexer.
 #include "format/model_lexer.h"
 
+#include "util/lines.h"
+
 namespace rayfarm {
 namespace {
 
@@ -41,7 +43,7 @@ void ModelLexer::scan(Token& t) {
     while (pos < n) {
       unsigned char k = char_class(p[pos]);
       if (!(k & kSpace)) break;
-      if (k & kNewline) {
+      if ((k & kNewline) || (p[pos] == '\r' && ends_line(text_, pos))) {
         ++line_;
         line_start_ = pos + 1;
       }
@@ -50,7 +52,7 @@ void ModelLexer::scan(Token& t) {
     if (pos >= n) break;
     bool comment = p[pos] == '#' || (p[pos] == '/' && pos + 1 < n && p[pos + 1] == '/');
     if (!comment) break;
-    while (pos < n && p[pos] != '\n') ++pos;
+    while (pos < n && p[pos] != '\n' && p[pos] != '\r') ++pos;
   }
   t.line = line_;
   t.column = static_cast<int>(pos - line_start_) + 1;
