@@ -1,5 +1,6 @@
 // `rayfarm convert SCENE --to json|model|pov [-o OUT]`.
 #include <algorithm>
+#include <filesystem>
 #include <iostream>
 #include <optional>
 #include <set>
@@ -91,7 +92,23 @@ Runner add_convert(CLI::App& app) {
       if (!options) return int(kBadInput);
       out = write_pov(*loaded->scene, *options);
     }
-    return write_output(args->out, out.data(), out.size()) ? int(kOk) : int(kBadInput);
+    if (!write_output(args->out, out.data(), out.size())) return int(kBadInput);
+    // Texture paths are relative to the scene's folder and written as they were: a scene
+    // written elsewhere finds its textures only if they are copied beside it.
+    if (!loaded->scene->textures.empty() && args->out != "-" && !args->out.empty() &&
+        args->scene != "-") {
+      namespace fs = std::filesystem;
+      std::error_code ec;
+      const fs::path from = fs::absolute(fs::path(args->scene), ec).parent_path();
+      const fs::path to = fs::absolute(fs::path(args->out), ec).parent_path();
+      if (!ec && fs::weakly_canonical(from, ec) != fs::weakly_canonical(to, ec))
+        std::cerr << "rayfarm: note: texture paths are relative to the scene's folder ('"
+                  << loaded->scene->textures.front().path
+                  << "') and are written as they were: copy the textures to the same paths "
+                     "beside "
+                  << args->out << "\n";
+    }
+    return int(kOk);
   };
 }
 

@@ -599,6 +599,26 @@ TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
   fs::remove_all(dir);
 }
 
+// Texture paths stay relative to the scene's folder: a scene converted into another folder
+// says that its textures must follow it.
+TEST(ConvertCli, AConvertedSceneElsewhereSaysWhereItsTexturesMustGo) {
+  REQUIRE_CLIENT();
+  const fs::path dir = fs::temp_directory_path() / ("rayfarm-cli-conv-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/textures.txt");
+  Outcome away = run(kRayfarm + " convert " + scene + " --to json -o " +
+                     q((dir / "t.json").string()) + " 2>&1");
+  EXPECT_EQ(away.code, 0) << away.out;
+  EXPECT_NE(away.out.find("note: texture paths are relative to the scene's folder"),
+            std::string::npos)
+      << away.out;
+  Outcome plain = run(kRayfarm + " convert " + q(RAYFARM_SOURCE_DIR "/scenes/cho.txt") +
+                      " --to json -o " + q((dir / "c.json").string()) + " 2>&1");
+  EXPECT_EQ(plain.code, 0);
+  EXPECT_EQ(plain.out, "") << "no textures, no note";
+  fs::remove_all(dir);
+}
+
 // `-o "$OUT"` with OUT unset is a mistake to say, not a reason to write elsewhere.
 TEST(Cli, AnEmptyFileNameIsRefused) {
   REQUIRE_CLIENT();
