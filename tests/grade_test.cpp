@@ -199,6 +199,9 @@ TEST(Assignment, ErrorsArePlacedByTheirJsonPath) {
   EXPECT_EQ(first_error(R"({"name": "x", "tests": []})"), "/tests: must be a non-empty list of tests");
   // Syntax errors have a line and column.
   EXPECT_EQ(first_error("{\"name\": \"x\",\n  \"tests\": [\n    {\"name\": \"a\" \"scene\": 1}]}").substr(0, 2), "3:");
+  // So does a number past double's range (it threw out of the parser: the grader aborted).
+  EXPECT_EQ(first_error("{\"name\": \"x\",\n \"tests\": [{\"name\": \"a\", \"points\": 1e400}]}"),
+            "2:36: invalid JSON: the number 1e400 is too large for a double");
 }
 
 TEST(Grade, AnIdenticalImagePassesWithFullPoints) {

@@ -216,6 +216,20 @@ std::optional<Assignment> parse_assignment(std::string_view text, Diagnostics& d
     diags.error("json-syntax", "invalid JSON: " + what,
                 position_of_offset(text, e.byte > 0 ? e.byte - 1 : 0));
     return std::nullopt;
+  } catch (const Json::exception& e) {
+    // A number past double's range ("points": 1e400) is out_of_range, not a parse error:
+    // its token is in the message, which places it.
+    const std::string what = e.what();
+    const size_t open = what.find('\''), close = what.rfind('\'');
+    const std::string token =
+        open != std::string::npos && close > open ? what.substr(open + 1, close - open - 1) : "";
+    const size_t at = token.empty() ? std::string_view::npos : text.find(token);
+    diags.error("json-syntax",
+                token.empty() ? "invalid JSON: a number is too large for a double"
+                              : "invalid JSON: the number " + token.substr(0, 60) +
+                                    " is too large for a double",
+                at == std::string_view::npos ? Where{} : position_of_offset(text, at));
+    return std::nullopt;
   }
   Reader r(diags);
   if (!root.is_object()) {
