@@ -171,6 +171,26 @@ void post_grade(Service& svc, const Request& req, Response& res) {
       e.path = k.substr(0, 64);
       return send_error(res, e);
     }
+  bool hints = true;
+  if (auto it = fields.find("hints"); it != fields.end()) {
+    static const std::set<std::string> kOn = {"1", "true", "yes"}, kOff = {"0", "false", "no"};
+    if (!kOn.count(it->second) && !kOff.count(it->second)) {
+      ApiError e = api_error(400, "invalid_option",
+                             "hints must be 1, true, yes, 0, false or no, got '" +
+                                 it->second.substr(0, 32) + "'");
+      e.path = "hints";
+      return send_error(res, e);
+    }
+    hints = kOn.count(it->second) > 0;
+  }
+  // One part per name: which of two images would be graded is no one's guess to make.
+  for (auto it = req.files.begin(); it != req.files.end(); it = req.files.upper_bound(it->first))
+    if (req.files.count(it->first) > 1) {
+      ApiError e = api_error(400, "duplicate_part",
+                             "part '" + it->first.substr(0, 200) + "' is sent more than once");
+      e.path = it->first.substr(0, 200);
+      return send_error(res, e);
+    }
   Format format = Format::json;
   if (auto it = fields.find("format"); it != fields.end()) {
     auto f = parse_format(it->second);
@@ -242,7 +262,7 @@ void post_grade(Service& svc, const Request& req, Response& res) {
   ServerBackend backend(svc, *slot, req, *files);
   GradeSettings settings;
   settings.base.profile = svc.settings().default_profile;
-  settings.hints = !(fields.count("hints") && fields.at("hints") == "0");
+  settings.hints = hints;
   settings.threads = 1;  // the hints' per-pixel record runs on this request's thread only
   GradeResult result = grade(*assignment, backend, settings);
   res.status = 200;

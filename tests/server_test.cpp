@@ -1530,6 +1530,27 @@ TEST(ServerGrade, AnUploadedAssignmentIsGradedInThePlatformsFormat) {
   ASSERT_TRUE(x);
   EXPECT_EQ(x->get_header_value("Content-Type"), "application/xml");
   EXPECT_NE(x->body.find("failures=\"1\""), std::string::npos);
+  items.pop_back();
+  // hints: yes or no in any of the usual words; anything else is refused, not read as yes.
+  for (const char* off : {"0", "false", "no"}) {
+    auto without = c->Post(std::string("/grade?hints=") + off, items);
+    ASSERT_TRUE(without);
+    ASSERT_EQ(without->status, 200) << off;
+    EXPECT_TRUE(Json::parse(without->body)["tests"][1]["hints"].empty()) << off << without->body;
+  }
+  auto with = c->Post("/grade?hints=yes", items);
+  ASSERT_TRUE(with);
+  EXPECT_FALSE(Json::parse(with->body)["tests"][1]["hints"].empty()) << with->body;
+  auto odd = c->Post("/grade?hints=off", items);
+  ASSERT_TRUE(odd);
+  EXPECT_EQ(odd->status, 400);
+  EXPECT_EQ(error_of(odd)["code"], "invalid_option");
+  // Two images under one name: which to grade is no one's guess.
+  items.push_back({"spheres.png", lab_file("students/dee/spheres.png"), "spheres.png", "image/png"});
+  auto twice = c->Post("/grade", items);
+  ASSERT_TRUE(twice);
+  EXPECT_EQ(twice->status, 400);
+  EXPECT_EQ(error_of(twice)["code"], "duplicate_part");
 }
 
 TEST(ServerGrade, AStoredAssignmentIsNamedAndItsFolderIsAFence) {
