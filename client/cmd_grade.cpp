@@ -260,7 +260,7 @@ class LocalBackend final : public Backend {
     command = replace_all(command, "{out}", shell_quote(out.string()));
     command = replace_all(command, "{name}", shell_quote(test.name));
     RunOutcome r = run_limited(command, !to_file, args_.timeout, args_.memory_mb);
-    s.log_tail = r.log.size() > kLogTail ? r.log.substr(r.log.size() - kLogTail) : r.log;
+    s.log_tail = output_tail(r.log, kLogTail);
     if (!r.started) {
       s.error = "your program could not be started";
       return s;

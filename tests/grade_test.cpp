@@ -501,6 +501,39 @@ TEST(Formats, JUnitMarkdownHtmlAndJson) {
   EXPECT_EQ(write_result(mixed_result(), Format::json), write_result(r, Format::json));
 }
 
+// A student's program writes what it likes: the report shows it as text, inside its fence.
+TEST(Formats, AProgramsOutputCannotBreakTheReport) {
+  // Cut inside a character, raw bytes, a terminal escape, a NUL.
+  std::string log(3000, 'x');
+  for (int i = 0; i < 700; ++i) log += "\xe6\x97\xa5";  // 日, 3 bytes each
+  log += "\xff\x1b[2J";
+  log.push_back('\0');
+  log += "```\n**PASSED 100/100**\n<!-- ";
+  const std::string tail = output_tail(log, 2048);
+  EXPECT_LE(tail.size(), 2048u + 3 * 8);
+  EXPECT_EQ(tail.substr(0, 3), "\xe6\x97\xa5") << "starts on a whole character";
+  EXPECT_EQ(tail.find('\x1b'), std::string::npos);
+  EXPECT_EQ(tail.find('\0'), std::string::npos);
+  EXPECT_EQ(tail.find('\xff'), std::string::npos);
+  GradeResult r;
+  r.assignment = "Lab";
+  TestResult t;
+  t.name = "run \xc3";
+  t.status = "failed";
+  t.message = "your program wrote no image";
+  t.log_tail = tail;
+  r.tests.push_back(t);
+  // Markdown: the fence is longer than any run of backticks in the output.
+  for (Format f : {Format::md, Format::gradescope}) {
+    const std::string text = write_result(r, f);
+    EXPECT_NE(text.find("````"), std::string::npos) << to_string(f);
+  }
+  // XML: only valid UTF-8 and no control characters but tab and newline.
+  const std::string xml = write_result(r, Format::junit);
+  for (unsigned char c : xml) EXPECT_TRUE(c >= 0x20 || c == '\n' || c == '\t') << int(c);
+  EXPECT_NE(xml.find("run \xef\xbf\xbd"), std::string::npos);
+}
+
 TEST(Formats, BytesThatAreNotUtf8BecomeReplacementCharacters) {
   // A student's file name or a backend message may carry any bytes; JSON output stays JSON.
   GradeResult r;

@@ -68,8 +68,13 @@ struct StudentImage {
   std::optional<Image> image;
   std::string error;     // missing or unreadable: what and where
   std::string note;      // e.g. another file name used, or the program's exit status
-  std::string log_tail;  // a program's output (--run), last part
+  std::string log_tail;  // a program's output (--run), last part: output_tail's
 };
+
+// The end of a program's output as every report shows it: its last `bytes` at most, as text
+// that any format, terminal or XML file takes (invalid UTF-8, a character cut in two, and
+// control characters but tab and newline become U+FFFD).
+std::string output_tail(std::string_view log, std::size_t bytes);
 
 // Where grading gets its files and renders: the command line reads the disk and renders
 // here; the server reads the request's parts and renders through its queue.

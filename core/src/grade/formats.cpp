@@ -8,6 +8,7 @@
 #include "rayfarm/grade.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/render.h"
+#include "util/utf8.h"
 
 namespace rayfarm::grading {
 namespace {
@@ -81,17 +82,16 @@ Image shrunk(const Image& in, int factor, bool brightest) {
 
 std::string escape_xml(const std::string& s) {
   std::string out;
-  for (unsigned char c : s) {
+  // XML 1.0 takes valid UTF-8 only, and no control characters but tab and newlines: a file
+  // name or message with raw bytes would make the whole report unreadable.
+  for (char c : printable_text(s)) {
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;
       case '>': out += "&gt;"; break;
       case '"': out += "&quot;"; break;
       case '\'': out += "&#39;"; break;
-      default:
-        // XML 1.0 allows no control characters but tab and newlines.
-        if (c < 0x20 && c != '\n' && c != '\t' && c != '\r') out += "?";
-        else out += static_cast<char>(c);
+      default: out += c;
     }
   }
   return out;
@@ -125,9 +125,16 @@ std::string feedback(const TestResult& t, bool markdown) {
   }
   if (t.metrics) out += "\n" + metrics_line(t) + "\n";
   if (!t.student_note.empty()) out += "\n" + t.student_note + "\n";
-  if (!t.log_tail.empty())
-    out += markdown ? "\nYour program's output (the end):\n\n```\n" + t.log_tail + "\n```\n"
+  if (!t.log_tail.empty()) {
+    // A fence longer than any run of backticks in the output: the output cannot close it
+    // and go on as the grader's own Markdown.
+    size_t longest = 0, run = 0;
+    for (char c : t.log_tail) longest = std::max(longest, run = c == '`' ? run + 1 : 0);
+    const std::string fence(std::max<size_t>(3, longest + 1), '`');
+    out += markdown ? "\nYour program's output (the end):\n\n" + fence + "\n" + t.log_tail + "\n" +
+                          fence + "\n"
                     : "\nYour program's output (the end):\n" + t.log_tail + "\n";
+  }
   return out;
 }
 
@@ -337,6 +344,14 @@ std::string markdown(const GradeResult& r) {
 }
 
 }  // namespace
+
+std::string output_tail(std::string_view log, std::size_t bytes) {
+  std::string_view tail = log.size() > bytes ? log.substr(log.size() - bytes) : log;
+  // A cut inside a character leaves continuation bytes first: not a character of its own.
+  while (log.size() > bytes && !tail.empty() && (static_cast<unsigned char>(tail[0]) & 0xc0) == 0x80)
+    tail.remove_prefix(1);
+  return printable_text(tail);
+}
 
 std::optional<Format> parse_format(std::string_view name) {
   for (Format f : {Format::gradescope, Format::prairielearn, Format::autolab, Format::junit,

@@ -60,6 +60,35 @@ inline Invisible find_invisible(std::string_view s) {
   return {};
 }
 
+// Text from a program we do not trust (a student's output), fit for any report, terminal or
+// XML file: invalid UTF-8 (a tail cut inside a character, raw bytes), control characters other
+// than tab and newline (a terminal's escape sequences, NUL) and U+FFFE/U+FFFF each become U+FFFD.
+inline std::string printable_text(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (std::size_t i = 0; i < s.size();) {
+    const unsigned char c = static_cast<unsigned char>(s[i]);
+    if (c < 0x80) {
+      const bool ok = c == '\n' || c == '\t' || (c >= 0x20 && c != 0x7f);
+      out += ok ? std::string(1, static_cast<char>(c)) : std::string("\xEF\xBF\xBD");
+      ++i;
+      continue;
+    }
+    const std::size_t n = utf8_length(s, i);
+    const bool nonchar = n == 3 && c == 0xef && static_cast<unsigned char>(s[i + 1]) == 0xbf &&
+                         static_cast<unsigned char>(s[i + 2]) >= 0xbe;
+    const bool c1 = n == 2 && c == 0xc2 && static_cast<unsigned char>(s[i + 1]) < 0xa0;
+    if (n == 0 || nonchar || c1) {
+      out += "\xEF\xBF\xBD";
+      i += n == 0 ? 1 : n;
+    } else {
+      out.append(s.substr(i, n));
+      i += n;
+    }
+  }
+  return out;
+}
+
 inline bool is_valid_utf8(std::string_view s) {
   for (std::size_t i = 0; i < s.size();) {
     if (static_cast<unsigned char>(s[i]) < 0x80) {
