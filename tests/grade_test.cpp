@@ -221,13 +221,19 @@ TEST(Grade, MissingUnreadableAndWronglySizedImagesFailWithAHint) {
   b.unreadable["bad.ppm"] = "P6\n64 48\n255\nxyz";
   Image small(48, 64);
   b.images["small.ppm"] = small;
+  b.images["huge.ppm"] = Image(2048, 2048);  // what a 49 KB PNG can hold
   Assignment a = parse_ok(R"({"name": "Lab", "tests": [
       {"name": "missing", "scene": "lab.txt"},
       {"name": "bad", "scene": "lab.txt", "image": "bad.ppm"},
       {"name": "small", "scene": "lab.txt", "image": "small.ppm"},
-      {"name": "no scene", "scene": "nowhere.txt"}]})");
+      {"name": "no scene", "scene": "nowhere.txt"},
+      {"name": "huge", "scene": "lab.txt", "image": "huge.ppm"}]})");
   GradeResult r = grade(a, b, {});
-  ASSERT_EQ(r.tests.size(), 4u);
+  ASSERT_EQ(r.tests.size(), 5u);
+  // A wrong size near the reference's is kept for the report; a far larger one is not held.
+  EXPECT_TRUE(r.tests[2].student.has_value());
+  EXPECT_EQ(codes(r.tests[4]), std::vector<std::string>{"wrong_size"});
+  EXPECT_FALSE(r.tests[4].student.has_value());
   EXPECT_EQ(r.tests[0].status, "failed");
   EXPECT_EQ(codes(r.tests[0]), std::vector<std::string>{"missing_image"});
   EXPECT_EQ(r.tests[0].message, "your image lab.ppm was not found");
@@ -242,7 +248,7 @@ TEST(Grade, MissingUnreadableAndWronglySizedImagesFailWithAHint) {
   // A test without its reference makes the whole result the grader's error.
   EXPECT_EQ(r.error.rfind("test 'no scene': ", 0), 0u) << r.error;
   EXPECT_EQ(r.score, 0);
-  EXPECT_EQ(r.max_score, 4);
+  EXPECT_EQ(r.max_score, 5);
 }
 
 TEST(Grade, CreditRulesGivePartialPoints) {
