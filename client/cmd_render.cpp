@@ -152,10 +152,12 @@ Runner add_render(CLI::App& app) {
       // a black image with no word is the worst answer to such a scene. Its errors (an image
       // too large) are said with their place whatever --quiet says, and stop here.
       Diagnostics lints;
-      lint_scene(*loaded->scene, *options, lints);
+      if (args->quiet)
+        lint_image_size(*loaded->scene, *options, lints);
+      else
+        lint_scene(*loaded->scene, *options, lints);
       for (const Diagnostic& d : lints.items())
-        if (!args->quiet || d.severity == Severity::error)
-          std::cerr << format_diagnostic(d, display_name(args->scene), *text);
+        std::cerr << format_diagnostic(d, display_name(args->scene), *text);
       if (lints.has_errors()) return kBadInput;
     }
 

@@ -575,13 +575,14 @@ TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
   const fs::path scene = dir / "huge.txt";
   std::ofstream(scene) << "material m { ambient 1 }\n"
                           "camera c { pixeldim 65535 65535 worlddim 8 6 viewpoint 4 3 5 }\n"
-                          "sphere s { material m center 4 3 -5 radius 1 }\n";
+                          "sphere s { material m center 4 3 -5 radius 1 }\n"
+                          "material spare { ambient 1 }\n";
   Outcome check = run(kRayfarm + " check " + q(scene.string()) + " 2>&1");
   EXPECT_EQ(check.code, 1) << check.out;
   EXPECT_NE(check.out.find("huge.txt:2:1: error: camera 'c': the image has 4294836225 pixels"),
             std::string::npos)
       << check.out;
-  EXPECT_NE(check.out.find(": 1 error, 0 warnings\n"), std::string::npos) << check.out;
+  EXPECT_NE(check.out.find(": 1 error, 1 warning\n"), std::string::npos) << check.out;
   // render stops with the same place, --quiet or not, and writes nothing.
   const fs::path out = dir / "huge.png";
   for (const std::string flags : {"", " -q"}) {
@@ -591,11 +592,17 @@ TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
     EXPECT_NE(r.out.find("huge.txt:2:1: error: camera 'c'"), std::string::npos) << r.out;
     EXPECT_FALSE(fs::exists(out));
   }
-  // The same view, smaller, renders.
+  // The same view, smaller, renders: quietly with -q (the unused material not said), and
+  // with its warning without.
   Outcome small = run(kRayfarm + " render -q " + q(scene.string()) +
                       " --width 80 --height 60 -o " + q(out.string()) + " 2>&1");
   EXPECT_EQ(small.code, 0) << small.out;
+  EXPECT_EQ(small.out, "");
   EXPECT_TRUE(fs::exists(out));
+  Outcome told = run(kRayfarm + " render " + q(scene.string()) + " --width 80 --height 60 -o " +
+                     q(out.string()) + " 2>&1");
+  EXPECT_EQ(told.code, 0) << told.out;
+  EXPECT_NE(told.out.find("huge.txt:4:1: warning: "), std::string::npos) << told.out;
   fs::remove_all(dir);
 }
 

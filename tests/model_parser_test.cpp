@@ -273,6 +273,8 @@ TEST(ModelParser, ReportsEveryKindOfNonNumberAtItsToken) {
                         "numbers are separated by plain spaces"},
       {"2\xE2\x88\x92" "1", "unexpected character U+2212 (a minus sign; write '-') after the "
                           "number: numbers are separated by plain spaces"},
+      {"4\xE2\x80\x8B", "unexpected character U+200B (a zero-width space) after the number: "
+                        "numbers are separated by plain spaces"},
       {"3\xE2\x82\xAC", "unexpected character U+20AC after the number: numbers are separated "
                         "by plain spaces"},
   };

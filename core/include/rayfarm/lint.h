@@ -14,6 +14,10 @@ namespace rayfarm {
 // and one error, "image-too-large": an image that render_image would refuse for its size.
 void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags);
 
+// Its one error alone, where warnings would not be shown (render --quiet): a scene's objects
+// are not walked.
+void lint_image_size(const Scene& scene, const RenderOptions& options, Diagnostics& diags);
+
 // Adds a warning (codes "course-...") wherever the course's reference program (CPSC 102,
 // 2014-18) would stop on or misread this model file: comments, unknown entities or attributes,
 // attribute order, missing or undefined materials, value counts, long names, `<x,y,z>` vectors,

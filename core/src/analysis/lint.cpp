@@ -16,15 +16,11 @@ bool is_black(const glm::dvec3& c) { return c.x <= 0 && c.y <= 0 && c.z <= 0; }
 
 }  // namespace
 
-void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
-  auto cam_index = scene.find_camera(options.camera);
-  if (!cam_index) {
-    diags.warning("unknown-camera", "no camera named '" + options.camera + "'", {});
-    return;
-  }
-  const Camera& cam = scene.cameras[*cam_index];
-  // An error, not a warning: render refuses it. Its place is the camera's when the size is
-  // the camera's own.
+namespace {
+
+// An error, not a warning: render refuses it. Its place is the camera's when the size is the
+// camera's own.
+void lint_size(const Camera& cam, const RenderOptions& options, Diagnostics& diags) {
   const bool sized_here = options.width <= 0 && options.height <= 0;
   if (std::string size = image_size_error(options.width > 0 ? options.width : cam.width,
                                           options.height > 0 ? options.height : cam.height,
@@ -35,6 +31,23 @@ void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& d
                                  "; --width and --height render the same view smaller"
                            : "with the width and height asked for, " + size,
                 sized_here ? cam.where : Where{});
+}
+
+}  // namespace
+
+void lint_image_size(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
+  if (auto cam_index = scene.find_camera(options.camera))
+    lint_size(scene.cameras[*cam_index], options, diags);
+}
+
+void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
+  auto cam_index = scene.find_camera(options.camera);
+  if (!cam_index) {
+    diags.warning("unknown-camera", "no camera named '" + options.camera + "'", {});
+    return;
+  }
+  const Camera& cam = scene.cameras[*cam_index];
+  lint_size(cam, options, diags);
   glm::dvec3 eye = cam.viewpoint;
   glm::dvec3 centre{cam.world_width / 2, cam.world_height / 2, 0};
   glm::dvec3 view = centre - eye;

@@ -1,6 +1,5 @@
 // Strict decimal numbers for the model file: the lexical form is checked by hand because
 // std::from_chars/strtod also accept nan, inf and hex, which the format forbids.
-#include <cstdio>
 #include <cstdint>
 #include <charconv>
 #include <cmath>
@@ -10,6 +9,7 @@
 
 #include "format/model_lexer.h"
 #include "rayfarm/model_parser.h"
+#include "util/utf8.h"
 
 namespace rayfarm {
 namespace {
@@ -83,20 +83,9 @@ std::optional<double> parse_number(std::string_view token, std::string* why) {
   if (i != s.size()) {
     // A character that looks like a space or a minus but is not ASCII (pasted from a document)
     // is invisible in the message unless it is named.
-    const auto byte = [&](size_t k) { return static_cast<unsigned char>(s[k]); };
-    const size_t extra = byte(i) >= 0xF0 ? 3 : byte(i) >= 0xE0 ? 2 : byte(i) >= 0xC0 ? 1 : 0;
-    if (extra > 0 && i + extra < s.size()) {
-      unsigned code = byte(i) & (0x3Fu >> extra);
-      for (size_t k = 1; k <= extra; ++k) code = (code << 6) | (byte(i + k) & 0x3Fu);
-      char hex[16];
-      std::snprintf(hex, sizeof hex, "U+%04X", code);
-      const char* name = code == 0xA0     ? " (a no-break space)"
-                         : code == 0x2009 ? " (a thin space)"
-                         : code == 0x202F ? " (a narrow no-break space)"
-                         : code == 0x2212 ? " (a minus sign; write '-')"
-                         : code == 0x2013 ? " (an en dash; write '-')"
-                                          : "";
-      unexpected = std::string("unexpected character ") + hex + name +
+    const size_t n = utf8_length(s, i);
+    if (n > 0) {
+      unexpected = "unexpected character " + code_point_name(utf8_code(s, i, n)) +
                    " after the number: numbers are separated by plain spaces";
       return fail(unexpected.c_str());
     }

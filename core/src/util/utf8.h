@@ -24,23 +24,40 @@ inline std::size_t utf8_length(std::string_view s, std::size_t i) {
   return n;
 }
 
-// A character that is not ASCII but looks like white space or like nothing at all (pasted from
-// a document or a web page): a no-break space, the Unicode spaces, zero-width characters, a
-// byte-order mark. Found in a word, it is why the word is not the keyword it shows.
+// "U+00A0 (a no-break space)": a character named in a message, with what it is where that
+// explains why a word or a number was not read as it looks (pasted from a document or a web
+// page). The one naming for every reader.
+inline std::string code_point_name(unsigned code) {
+  char hex[16];
+  std::snprintf(hex, sizeof hex, "U+%04X", code);
+  const bool space = (code >= 0x2000 && code <= 0x200A) || code == 0x3000;
+  const char* what = code == 0xA0                        ? " (a no-break space)"
+                     : code == 0x2009                    ? " (a thin space)"
+                     : code == 0x202F                    ? " (a narrow no-break space)"
+                     : code == 0x200B                    ? " (a zero-width space)"
+                     : code == 0xFEFF                    ? " (a byte-order mark)"
+                     : code == 0x2212                    ? " (a minus sign; write '-')"
+                     : code == 0x2013                    ? " (an en dash; write '-')"
+                     : space                             ? " (a Unicode space)"
+                     : code >= 0x200C && code <= 0x2060  ? " (an invisible character)"
+                                                         : "";
+  return hex + std::string(what);
+}
+
+// The code point of the valid multi-byte UTF-8 sequence at s[i] (utf8_length(s, i) > 0).
+inline unsigned utf8_code(std::string_view s, std::size_t i, std::size_t n) {
+  unsigned code = static_cast<unsigned char>(s[i]) & (0x7Fu >> n);
+  for (std::size_t k = 1; k < n; ++k) code = (code << 6) | (static_cast<unsigned char>(s[i + k]) & 0x3Fu);
+  return code;
+}
+
+// A character that is not ASCII but looks like white space or like nothing at all: a
+// no-break space, the Unicode spaces, zero-width characters, a byte-order mark. Found in a
+// word, it is why the word is not the keyword it shows.
 struct Invisible {
   std::size_t at = std::string_view::npos;  // byte offset of the first one
   unsigned code = 0;
-  std::string name() const {  // "U+00A0 (a no-break space)"
-    char hex[16];
-    std::snprintf(hex, sizeof hex, "U+%04X", code);
-    const char* what = code == 0xA0                      ? " (a no-break space)"
-                       : code == 0x200B                  ? " (a zero-width space)"
-                       : code == 0xFEFF                  ? " (a byte-order mark)"
-                       : code == 0x202F                  ? " (a narrow no-break space)"
-                       : code >= 0x200C && code <= 0x2060 ? " (an invisible character)"
-                                                          : " (a Unicode space)";
-    return hex + std::string(what);
-  }
+  std::string name() const { return code_point_name(code); }
 };
 
 inline Invisible find_invisible(std::string_view s) {
@@ -50,8 +67,7 @@ inline Invisible find_invisible(std::string_view s) {
       ++i;
       continue;
     }
-    unsigned code = static_cast<unsigned char>(s[i]) & (0x7Fu >> n);
-    for (std::size_t k = 1; k < n; ++k) code = (code << 6) | (static_cast<unsigned char>(s[i + k]) & 0x3Fu);
+    const unsigned code = utf8_code(s, i, n);
     if (code == 0xA0 || (code >= 0x2000 && code <= 0x200D) || code == 0x2028 || code == 0x2029 ||
         code == 0x202F || code == 0x205F || code == 0x2060 || code == 0x3000 || code == 0xFEFF)
       return {i, code};
