@@ -215,10 +215,9 @@ class LocalBackend final : public Backend {
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) {
       // The other of the two formats under the same name is graded, with a note.
-      for (const char* ext : {".ppm", ".png", ".PPM", ".PNG"}) {
-        fs::path other = file;
-        other.replace_extension(ext);
-        if (other != file && fs::is_regular_file(other, ec)) {
+      for (const std::string& name : other_image_names(test.image)) {
+        const fs::path other = fs::path(args_.images) / name;
+        if (fs::is_regular_file(other, ec)) {
           s.note = "graded " + other.filename().string() + ": no " + test.image + " was found";
           file = other;
           break;
@@ -226,7 +225,7 @@ class LocalBackend final : public Backend {
       }
     }
     if (!fs::is_regular_file(file, ec)) {
-      s.error = "your image " + test.image + " was not found";
+      s.error = "your image " + test.image + " was not found" + found_like(test.image);
       return s;
     }
     // Links within the folder are fine; one out of it could hand in any file this grader
@@ -247,6 +246,20 @@ class LocalBackend final : public Backend {
   }
 
  private:
+  // "; a file named 'mirorr.png' is there" when a file of the image's folder has a name close
+  // to it: a misnamed image is otherwise just missing.
+  std::string found_like(const std::string& image) const {
+    const fs::path wanted = fs::path(args_.images) / image;
+    std::vector<std::string> names;
+    std::error_code ec;
+    for (fs::directory_iterator it(wanted.parent_path(), ec), end; !ec && it != end && names.size() < 500;
+         it.increment(ec))
+      if (std::string name = it->path().filename().string(); name.size() <= 200) names.push_back(name);
+    const std::vector<std::string_view> views(names.begin(), names.end());
+    const std::string near = nearest_word(wanted.filename().string(), views);
+    return near.empty() ? "" : "; a file named '" + near + "' is there";
+  }
+
   StudentImage run(const TestSpec& test, const SceneFiles* scene) {
     StudentImage s;
     const bool to_file = args_.run.find("{out}") != std::string::npos;

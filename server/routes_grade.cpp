@@ -115,18 +115,38 @@ class ServerBackend final : public Backend {
 
   StudentImage student(const TestSpec& test, const SceneFiles*) override {
     StudentImage s;
-    auto it = req_.files.find(test.image);
+    std::string name = test.image;
+    auto it = req_.files.find(name);
+    // As the command line grades a folder: the other format under the same name, said so.
+    for (const std::string& other : other_image_names(test.image)) {
+      if (it != req_.files.end()) break;
+      it = req_.files.find(other);
+      if (it != req_.files.end()) {
+        name = other;
+        s.note = "graded " + other + ": no " + test.image + " was uploaded";
+      }
+    }
     if (it == req_.files.end()) {
-      s.error = "your image " + test.image + " was not uploaded";
+      s.error = "your image " + test.image + " was not uploaded" + uploaded_like(test.image);
       return s;
     }
     std::string error;
     s.image = decode_image(it->second.content, &error, svc_.settings().max_pixels);
-    if (!s.image) s.error = "your image " + test.image + " cannot be read: " + error;
+    if (!s.image) s.error = "your image " + name + " cannot be read: " + error;
     return s;
   }
 
  private:
+  // "; a part named 'spheres.jpg' was" when one of the uploaded parts' names is close: a
+  // misnamed image is otherwise just missing.
+  std::string uploaded_like(const std::string& image) const {
+    std::vector<std::string_view> names;
+    for (const auto& [name, part] : req_.files)
+      if (name != "assignment" && name.size() <= 200 && names.size() < 200) names.push_back(name);
+    const std::string near = nearest_word(image, names);
+    return near.empty() ? "" : "; a part named '" + near.substr(0, 200) + "' was";
+  }
+
   Service& svc_;
   const Slot& slot_;
   const Request& req_;

@@ -116,6 +116,18 @@ TEST_F(GradeCli, TheWorkedExampleGradesEachStudent) {
   EXPECT_EQ(fay["tests"][3]["hints"][0]["code"], "highlights");
 }
 
+// A misnamed image is missing, and the report names the file that is probably it.
+TEST_F(GradeCli, AMissingImageNamesAFileCloseToItsName) {
+  const fs::path images = dir_ / "ada";
+  fs::copy(kLab + "/students/ada", images);
+  fs::rename(images / "glint.png", images / "Glnt.png");
+  Json j = grade(q(kLab + "/lab1.json") + " --images " + q(images.string()));
+  EXPECT_EQ(j["tests"][3]["score"], 0);
+  EXPECT_EQ(j["tests"][3]["message"],
+            "your image glint.png was not found; a file named 'Glnt.png' is there");
+  EXPECT_EQ(j["tests"][0]["score"], 2);
+}
+
 TEST_F(GradeCli, PlatformFilesAreWrittenWhereAsked) {
   const fs::path out = dir_ / "results/results.json";  // PrairieLearn: the folder is not there
   Outcome r = run(kRayfarm + " grade " + q(kLab + "/lab1.json") + " --images " +

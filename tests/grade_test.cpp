@@ -202,6 +202,15 @@ TEST(Assignment, ErrorsArePlacedByTheirJsonPath) {
   // So does a number past double's range (it threw out of the parser: the grader aborted).
   EXPECT_EQ(first_error("{\"name\": \"x\",\n \"tests\": [{\"name\": \"a\", \"points\": 1e400}]}"),
             "2:36: invalid JSON: the number 1e400 is too large for a double");
+  // A key given twice is an error where it repeats, as in a scene: the last one used to win
+  // silently (an assignment edited by two people, the second "points" unseen).
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "points": 5, "points": 50}]})"),
+            "/tests/0/points: key given twice");
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt"}], "tests": []})"),
+            "/tests: key given twice");
+  // Nesting is bounded as in scenes.
+  EXPECT_EQ(first_error(R"({"name": "x", "tests": )" + std::string(100, '[') + std::string(100, ']') + "}"),
+            "/tests/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0/0: JSON nested deeper than 64 levels");
 }
 
 TEST(Grade, AnIdenticalImagePassesWithFullPoints) {

@@ -1553,6 +1553,33 @@ TEST(ServerGrade, AnUploadedAssignmentIsGradedInThePlatformsFormat) {
   EXPECT_EQ(error_of(twice)["code"], "duplicate_part");
 }
 
+// An image handed in under the other format's name is graded, with a note, as the command
+// line grades a folder; a missing one names an uploaded part close to its name.
+TEST(ServerGrade, AnImageUnderAnotherNameIsFoundOrNamed) {
+  TestServer server;
+  auto c = server.client();
+  httplib::MultipartFormDataItems items = {
+      {"assignment", R"({"name": "Lab", "profile": "cpsc102", "tests": [
+        {"name": "spheres", "scene": "scenes/spheres.txt", "image": "spheres.ppm"},
+        {"name": "mirror", "scene": "scenes/mirror.txt", "image": "mirror.png"}]})",
+       "lab.json", "application/json"},
+      {"scenes/spheres.txt", lab_file("scenes/spheres.txt"), "spheres.txt", "text/plain"},
+      {"scenes/mirror.txt", lab_file("scenes/mirror.txt"), "mirror.txt", "text/plain"},
+      {"spheres.png", lab_file("students/ada/spheres.png"), "spheres.png", "image/png"},
+      {"mirorr.png", lab_file("students/ada/mirror.png"), "mirorr.png", "image/png"}};
+  auto r = c->Post("/grade", items);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  const Json j = Json::parse(r->body);
+  EXPECT_EQ(j["tests"][0]["status"], "passed") << r->body;
+  EXPECT_EQ(j["tests"][0]["note"], "graded spheres.png: no spheres.ppm was uploaded") << r->body;
+  EXPECT_EQ(j["tests"][1]["status"], "failed") << r->body;
+  EXPECT_NE(j["tests"][1]["message"].get<std::string>().find(
+                "your image mirror.png was not uploaded; a part named 'mirorr.png' was"),
+            std::string::npos)
+      << r->body;
+}
+
 TEST(ServerGrade, AStoredAssignmentIsNamedAndItsFolderIsAFence) {
   Settings s = test_settings();
   s.assignments_dir = RAYFARM_SOURCE_DIR "/scenes/assignments/lab1";

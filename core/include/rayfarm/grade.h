@@ -71,6 +71,11 @@ struct StudentImage {
   std::string log_tail;  // a program's output (--run), last part: output_tail's
 };
 
+// The names a student may have handed `image` in under instead: the same name with the other
+// format's extension, in either case (".ppm" for ".png" and back). Both graders grade the
+// first that exists, with a note saying so.
+std::vector<std::string> other_image_names(const std::string& image);
+
 // The end of a program's output as every report shows it: its last `bytes` at most, as text
 // that any format, terminal or XML file takes (invalid UTF-8, a character cut in two, and
 // control characters but tab and newline become U+FFFD).

@@ -5,12 +5,13 @@
 #include <cmath>
 #include <set>
 
+#include "format/json_tree.h"
 #include "rayfarm/grade.h"
 
 namespace rayfarm::grading {
 namespace {
 
-using Json = nlohmann::json;
+using Json = nlohmann::ordered_json;
 
 constexpr std::array<std::string_view, 9> kTopKeys = {
     "name", "profile", "options", "tests", "threshold", "neighborhood", "max_bad_fraction",
@@ -204,33 +205,10 @@ std::string stem_of(const std::string& path) {
 }  // namespace
 
 std::optional<Assignment> parse_assignment(std::string_view text, Diagnostics& diags) {
-  Json root;
-  try {
-    root = Json::parse(text.begin(), text.end());
-  } catch (const Json::parse_error& e) {
-    std::string what = e.what();
-    size_t close = what.find("] ");
-    if (close != std::string::npos) what = what.substr(close + 2);
-    size_t colon = what.find(": ");
-    if (what.starts_with("parse error") && colon != std::string::npos) what = what.substr(colon + 2);
-    diags.error("json-syntax", "invalid JSON: " + what,
-                position_of_offset(text, e.byte > 0 ? e.byte - 1 : 0));
-    return std::nullopt;
-  } catch (const Json::exception& e) {
-    // A number past double's range ("points": 1e400) is out_of_range, not a parse error:
-    // its token is in the message, which places it.
-    const std::string what = e.what();
-    const size_t open = what.find('\''), close = what.rfind('\'');
-    const std::string token =
-        open != std::string::npos && close > open ? what.substr(open + 1, close - open - 1) : "";
-    const size_t at = token.empty() ? std::string_view::npos : text.find(token);
-    diags.error("json-syntax",
-                token.empty() ? "invalid JSON: a number is too large for a double"
-                              : "invalid JSON: the number " + token.substr(0, 60) +
-                                    " is too large for a double",
-                at == std::string_view::npos ? Where{} : position_of_offset(text, at));
-    return std::nullopt;
-  }
+  // Read as scenes are: a key given twice is an error at its path, not the last one winning.
+  std::optional<Json> parsed = parse_json_tree(text, diags);
+  if (!parsed) return std::nullopt;
+  Json& root = *parsed;
   Reader r(diags);
   if (!root.is_object()) {
     r.error("", "an assignment is a JSON object with \"name\" and \"tests\"");

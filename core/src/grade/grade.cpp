@@ -63,6 +63,18 @@ std::optional<SceneFiles> load_scene_files(const std::string& path, const std::s
   return SceneFiles{path, text, recording.files(), std::move(loaded)};
 }
 
+std::vector<std::string> other_image_names(const std::string& image) {
+  const size_t slash = image.find_last_of("/\\");
+  const size_t dot = image.rfind('.');
+  const std::string stem =
+      dot != std::string::npos && (slash == std::string::npos || dot > slash + 1) ? image.substr(0, dot)
+                                                                                 : image;
+  std::vector<std::string> out;
+  for (const char* ext : {".ppm", ".png", ".PPM", ".PNG"})
+    if (stem + ext != image) out.push_back(stem + ext);
+  return out;
+}
+
 std::string reference_key(const SceneFiles& scene, const RenderOptions& options) {
   return content_key(scene.loaded->desc, options, texture_hashes(*scene.loaded->scene, scene.textures));
 }

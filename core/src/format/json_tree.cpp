@@ -1,0 +1,182 @@
+// The JSON reader shared by scenes and assignments (json_tree.h).
+#include "format/json_tree.h"
+
+#include <deque>
+#include <set>
+#include <vector>
+
+#include "rayfarm/json_scene.h"
+
+namespace rayfarm {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+// Builds the document from SAX events. nlohmann's own builders are quadratic for scenes of
+// many entities (ordered_json looks keys up linearly; the callback parser rescans the parent
+// after every child), have no depth limit and silently keep the last of repeated keys.
+class TreeBuilder {
+ public:
+  bool null() { return add(nullptr); }
+  bool boolean(bool v) { return add(v); }
+  bool number_integer(Json::number_integer_t v) { return add(v); }
+  bool number_unsigned(Json::number_unsigned_t v) { return add(v); }
+  bool number_float(Json::number_float_t v, const std::string&) { return add(v); }
+  bool string(std::string& v) { return add(std::move(v)); }
+  bool binary(Json::binary_t&) { return add(nullptr); }  // JSON text has none
+  bool start_object(std::size_t) { return open(Json::object()); }
+  bool start_array(std::size_t) { return open(Json::array()); }
+  bool end_object() { return close(); }
+  bool end_array() { return close(); }
+
+  bool key(std::string& k) {
+    Frame& f = frames_.back();
+    f.key = std::move(k);
+    f.repeated = !f.keys.insert(f.key).second;
+    if (f.repeated && duplicates_.size() < 20) duplicates_.push_back(path());
+    return true;
+  }
+
+  bool parse_error(std::size_t position, const std::string& token, const Json::exception& e) {
+    if (e.id == 406) {  // "number overflow parsing": point at the start of the number
+      error_offset_ = position >= token.size() ? position - token.size() : 0;
+      error_ = "the number " + token.substr(0, 60) + " is too large for a double";
+    } else {  // the position is one past the character that failed
+      error_offset_ = position > 0 ? position - 1 : 0;
+      error_ = error_text(e.what());
+    }
+    return false;
+  }
+
+  Json& root() { return root_; }
+  bool too_deep() const { return too_deep_; }
+  const std::string& deep_path() const { return deep_path_; }
+  const std::string& error() const { return error_; }
+  size_t error_offset() const { return error_offset_; }
+  const std::vector<std::string>& duplicates() const { return duplicates_; }
+
+  // nlohmann's message without its "[json.exception...] " and "parse error at line L,
+  // column C: " prefixes (the position is reported separately).
+  static std::string error_text(const std::string& what) {
+    std::string text = what;
+    if (text.starts_with("[json.exception.")) {
+      size_t close = text.find("] ");
+      if (close != std::string::npos) text = text.substr(close + 2);
+    }
+    if (text.starts_with("parse error")) {
+      size_t colon = text.find(": ");
+      if (colon != std::string::npos) text = text.substr(colon + 2);
+    }
+    return text;
+  }
+
+ private:
+  struct Frame {
+    Json* node = nullptr;
+    long index = -1;  // arrays: the element being read
+    std::string key;  // objects: the member being read
+    bool repeated = false;
+    std::set<std::string> keys;
+  };
+
+  // Where the next value goes: the root, a new array element or a new member. A repeated
+  // key's value is parsed into scratch space and dropped (it is reported as an error).
+  Json* slot() {
+    if (frames_.empty()) return &root_;
+    Frame& f = frames_.back();
+    if (f.node->is_array()) {
+      ++f.index;
+      f.node->push_back(nullptr);
+      return &f.node->back();
+    }
+    if (f.repeated) return &scratch_.emplace_back();
+    // Keys are unique here, so skip ordered_json's linear search for them.
+    auto& members = static_cast<Json::object_t::Container&>(f.node->get_ref<Json::object_t&>());
+    members.emplace_back(f.key, nullptr);
+    return &members.back().second;
+  }
+
+  template <class V>
+  bool add(V&& v) {
+    *slot() = Json(std::forward<V>(v));
+    return true;
+  }
+
+  bool open(Json container) {
+    Json* node = slot();  // (before the check: the path then names this container's place)
+    if (frames_.size() >= static_cast<size_t>(kMaxJsonDepth)) {
+      too_deep_ = true;
+      deep_path_ = path();
+      return false;
+    }
+    *node = std::move(container);
+    // Safe to keep: a container only grows while it is the innermost one.
+    Frame frame;
+    frame.node = node;
+    frames_.push_back(std::move(frame));
+    return true;
+  }
+
+  bool close() {
+    frames_.pop_back();
+    return true;
+  }
+
+  std::string path() const {
+    std::string p;
+    for (const Frame& f : frames_)
+      p += f.node->is_array() ? "/" + std::to_string(f.index) : "/" + json_pointer_token(f.key);
+    return p;
+  }
+
+  Json root_;
+  std::vector<Frame> frames_;
+  std::deque<Json> scratch_;
+  std::vector<std::string> duplicates_;
+  std::string error_;
+  size_t error_offset_ = 0;
+  bool too_deep_ = false;
+  std::string deep_path_;
+};
+
+}  // namespace
+
+std::string json_pointer_token(std::string_view key) {
+  std::string out;
+  for (char c : key) {
+    if (c == '~')
+      out += "~0";
+    else if (c == '/')
+      out += "~1";
+    else
+      out += c;
+  }
+  return out;
+}
+
+std::optional<Json> parse_json_tree(std::string_view text, Diagnostics& diags) {
+  TreeBuilder builder;
+  bool parsed = false;
+  try {
+    parsed = Json::sax_parse(text.begin(), text.end(), &builder);
+  } catch (const Json::exception& e) {
+    diags.error("json-syntax", "invalid JSON: " + TreeBuilder::error_text(e.what()), {});
+    return std::nullopt;
+  }
+  if (builder.too_deep()) {
+    diags.error("json-depth",
+                "JSON nested deeper than " + std::to_string(kMaxJsonDepth) + " levels",
+                Where{0, 0, builder.deep_path()});
+    return std::nullopt;
+  }
+  if (!parsed) {
+    diags.error("json-syntax", "invalid JSON: " + builder.error(),
+                position_of_offset(text, builder.error_offset()));
+    return std::nullopt;
+  }
+  for (const std::string& path : builder.duplicates())
+    diags.error("duplicate-key", "key given twice", Where{0, 0, path});
+  return std::move(builder.root());
+}
+
+}  // namespace rayfarm

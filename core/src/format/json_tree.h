@@ -1,0 +1,24 @@
+// A JSON document read into nlohmann's ordered_json by our own SAX builder: nesting bounded
+// (kMaxJsonDepth), a repeated key caught, key order kept, in linear time. Scenes and
+// assignments are read by it alike, so both refuse the same documents in the same words.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "rayfarm/diagnostic.h"
+
+namespace rayfarm {
+
+// A key as a JSON Pointer token (RFC 6901: ~ as ~0, / as ~1).
+std::string json_pointer_token(std::string_view key);
+
+// The document, or nothing after an error: invalid JSON ("json-syntax", at its line and
+// column) or nesting too deep ("json-depth", at its path). A key given twice in one object is
+// an error at its path ("duplicate-key"), and the document is still returned, holding the
+// first value, so that its reader can say what else is wrong.
+std::optional<nlohmann::ordered_json> parse_json_tree(std::string_view text, Diagnostics& diags);
+
+}  // namespace rayfarm
