@@ -329,6 +329,25 @@ TEST(Hints, NoPathCap) {
   EXPECT_EQ(codes(grade_one(mine, "", "cpsc102", scene)), std::vector<std::string>{"path_cap"});
 }
 
+// A render that changes nothing explains nothing: on a test passed within its threshold, the
+// render without a path cap (no path here is that long, so it is the reference) matched the
+// student's image as well as the reference and was named as their mistake.
+TEST(Hints, NoneFromARenderNoNearerThanTheReference) {
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  Image near = ref;
+  bool up = false;  // two levels either way: not the signature of rounding or arithmetic
+  for (size_t i = 0; i < near.rgb.size(); i += 97, up = !up)
+    near.rgb[i] = static_cast<std::uint8_t>(up ? (near.rgb[i] < 254 ? near.rgb[i] + 2 : 253)
+                                               : (near.rgb[i] > 1 ? near.rgb[i] - 2 : 2));
+  TestResult t = grade_one(near, R"(, "threshold": 2)");
+  EXPECT_EQ(t.status, "passed");
+  EXPECT_EQ(codes(t), std::vector<std::string>{}) << t.hints[0].message;
+  // Nor when the test fails: the reference then is no better than the candidate.
+  TestResult failing = grade_one(near);
+  EXPECT_EQ(failing.status, "failed");
+  for (const std::string& code : codes(failing)) EXPECT_NE(code, "path_cap");
+}
+
 TEST(Hints, NoReflections) {
   const Image mine = render_with(kScene, {{"profile", "cpsc102"}, {"max_depth", "0"}});
   EXPECT_EQ(codes(grade_one(mine)), std::vector<std::string>{"no_reflections"});

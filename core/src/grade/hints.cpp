@@ -26,9 +26,15 @@ double bad_fraction(const Image& a, const Image& b, const TestSpec& t) {
   return m ? m->differing_fraction : 1;
 }
 
-// Whether `candidate` explains the student's image far better than the reference does.
-bool explains(double candidate, double base, const TestSpec& t) {
-  return candidate <= t.max_bad_fraction || (candidate < 0.02 && candidate <= base / 4);
+// Whether `candidate` (an image the student may have made instead) explains their image: it
+// is that image exactly, or under the test's rules it is nearer to it than the reference
+// (`base`, the reference's bad fraction) by far. Never one no nearer than the reference: on a
+// test passed within its threshold, a render that changes nothing (no path cap where no path
+// is that long) matched as well as the reference and was named as the mistake.
+bool explains(const Image& candidate, const Image& mine, double base, const TestSpec& t) {
+  if (candidate == mine) return true;  // (mine is not the reference: find_hints)
+  const double c = bad_fraction(candidate, mine, t);
+  return c < base && (c <= t.max_bad_fraction || (c < 0.02 && c <= base / 4));
 }
 
 template <class Map>
@@ -104,7 +110,7 @@ std::optional<Hint> layout_hint(const Image& ref, const Image& mine, const TestS
   }
   for (const Candidate& c : candidates) {
     if (c.image == ref) continue;  // a symmetric image tells nothing
-    if (explains(bad_fraction(c.image, mine, t), base, t)) return Hint{c.code, c.message};
+    if (explains(c.image, mine, base, t)) return Hint{c.code, c.message};
   }
   return std::nullopt;
 }
@@ -207,7 +213,7 @@ std::optional<Hint> convention_hint(const Image& mine, const TestSpec& t,
     if (!profile_conflict(tr.options).empty() || tr.options == options) continue;
     std::optional<Image> alt = alternative(tr.options);
     if (!alt || alt->width != mine.width || alt->height != mine.height) continue;
-    if (explains(bad_fraction(*alt, mine, t), base, t)) return Hint{tr.code, tr.message};
+    if (explains(*alt, mine, base, t)) return Hint{tr.code, tr.message};
   }
   return std::nullopt;
 }
