@@ -152,6 +152,18 @@ TEST(FormatDiagnostic, KeepsTabsSoTheCaretLinesUp) {
             "  \t\t^\n");
 }
 
+// The column counts bytes; the caret goes under the character the line shows there, after
+// names in other scripts too (it sat one space right per extra byte).
+TEST(FormatDiagnostic, TheCaretCountsCharactersNotBytes) {
+  const std::string line = "material caf\xC3\xA9 { diffuse \xE2\x80\x94 }";  // é, then an em dash
+  Diagnostic d{Severity::error, "x", "bad", {1, static_cast<int>(line.find("\xE2")) + 1, {}}};
+  EXPECT_EQ(d.where.column, 26);  // 24 characters before it, 25 bytes
+  EXPECT_EQ(format_diagnostic(d, "f", line),
+            "f:1:26: error: bad\n"
+            "  " + line + "\n"
+            "  " + std::string(24, ' ') + "^\n");
+}
+
 TEST(FormatDiagnostic, DropsTheCarriageReturnOfCrlfLines) {
   Diagnostic d{Severity::error, "x", "bad", {2, 2, {}}};
   EXPECT_EQ(format_diagnostic(d, "f", "camera\r\n{ pixeldim\r\n}\r\n"),

@@ -107,9 +107,14 @@ std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
     std::string_view text = source_line(source, d.where.line);
     if (!text.empty() && text.size() <= 400) {
       out << "  " << printable(text, true, std::string_view::npos) << "\n  ";
-      // Keep tabs so the caret lines up under the offending column.
-      for (int i = 1; i < d.where.column && i <= static_cast<int>(text.size()); ++i)
-        out << (text[i - 1] == '\t' ? '\t' : ' ');
+      // One space (or the tab) per character the line above shows, so the caret lines up
+      // under the offending one after non-ASCII text too (the column counts bytes).
+      const size_t upto = std::min(static_cast<size_t>(d.where.column - 1), text.size());
+      for (size_t i = 0; i < upto;) {
+        out << (text[i] == '\t' ? '\t' : ' ');
+        const size_t n = static_cast<unsigned char>(text[i]) < 0x80 ? 0 : utf8_length(text, i);
+        i += n > 0 ? n : 1;
+      }
       out << "^\n";
     }
   }
