@@ -497,6 +497,17 @@ TEST(Formats, PrairieLearnStaysUnderItsSizeLimit) {
   const std::string text = write_result(grade(a, b, settings), Format::prairielearn);
   EXPECT_LT(text.size(), 1000000u);
   EXPECT_TRUE(Json::parse(text)["tests"][0].contains("images"));
+  // The text counts too: 20 failing tests with long names (a program's output is as long)
+  // leave the images less room (they took their 700 KB whatever the text was: 1.07 MB).
+  std::string many = R"({"name": "Big", "tests": [)";
+  for (int i = 0; i < 20; ++i)
+    many += std::string(i ? ", " : "") + R"({"name": ")" + std::to_string(i) + std::string(40000, 'n') +
+            R"(", "scene": "big.txt", "image": "a.ppm"})";
+  const std::string crowded =
+      write_result(grade(parse_ok(many + "]}"), b, settings), Format::prairielearn);
+  EXPECT_LT(crowded.size(), 1000000u);
+  EXPECT_TRUE(Json::parse(crowded)["tests"][0].contains("images"));
+  EXPECT_GT(crowded.size(), 20u * 40000);  // every name is there
 }
 
 TEST(Formats, AutolabScoreLineComesLast) {

@@ -192,25 +192,36 @@ std::string gradescope(const GradeResult& r) {
   return text(out, 2) + "\n";
 }
 
-// PrairieLearn keeps results under 1 MB: images go on failed tests, shrunk to share a budget.
+// PrairieLearn keeps results under 1 MB: images go on failed tests, shrunk to share what the
+// text leaves (a program's output on 64 tests is some 150 KB of it).
 std::string prairielearn(const GradeResult& r) {
+  constexpr size_t kLimit = 1000 * 1000;
   constexpr size_t kImageBudget = 700 * 1024;
+  constexpr size_t kImageWrapping = 256;  // an image list's labels, keys and indentation
   Json tests = Json::array();
   std::vector<std::string> format_errors;
   bool any_image = false;
-  size_t failing = 0;
+  size_t failing = 0, text_size = 0;
   for (const TestResult& t : r.tests) {
     if (!t.student_missing) any_image = true;
     else format_errors.push_back(t.name + ": " + t.message);
     failing += t.status != "passed" && t.reference && t.student;
-  }
-  const size_t per_test = failing ? kImageBudget / failing : 0;
-  for (const TestResult& t : r.tests) {
     Json j = {{"name", t.name},
               {"points", score_number(t.score)},
               {"max_points", score_number(t.max_score)},
               {"message", t.message},
               {"output", feedback(t, false)}};
+    text_size += text(j, 2).size() + 64;  // (nested one level deeper in the file)
+    tests.push_back(std::move(j));
+  }
+  text_size += text(header_text(r)).size() + 4096;
+  for (const std::string& e : format_errors) text_size += text(e).size() + 8;
+  const size_t room = kLimit > text_size + failing * kImageWrapping
+                          ? kLimit - text_size - failing * kImageWrapping
+                          : 0;
+  const size_t per_test = failing ? std::min(kImageBudget, room) / failing : 0;
+  for (size_t i = 0; i < r.tests.size(); ++i) {
+    const TestResult& t = r.tests[i];
     if (t.status != "passed" && t.reference && t.student) {
       for (int factor = 1; factor <= 64; factor *= 2) {
         Json images = Json::array();
@@ -224,12 +235,11 @@ std::string prairielearn(const GradeResult& r) {
         add("Yours", *t.student);
         if (t.diff) add("Difference", *t.diff, true);
         if (size <= per_test) {
-          j["images"] = images;
+          tests[i]["images"] = images;
           break;
         }
       }
     }
-    tests.push_back(j);
   }
   Json out = {{"gradable", r.error.empty() && any_image},
               {"score", score_number(r.error.empty() ? r.fraction() : 0)},
