@@ -113,6 +113,13 @@ void HttpApi::harden() {
       return httplib::Server::HandlerResponse::Handled;
     }
     if (answer_preflight(req, res)) return httplib::Server::HandlerResponse::Handled;
+    if (ApiError e = ambiguous_query(req.target)) {
+      if (req.has_header("Transfer-Encoding") ||
+          (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0"))
+        GuardedServer::close_after(res);
+      send_error(res, e);
+      return httplib::Server::HandlerResponse::Handled;
+    }
     // A request with neither Content-Length nor Transfer-Encoding has an empty body (RFC 9112
     // §6.3), as `curl -X POST URL` sends it; this cpp-httplib would read until the client
     // gave up instead.
@@ -132,6 +139,8 @@ void HttpApi::harden() {
   // Cross-origin answers carry the CORS headers for the one configured origin only, errors
   // included (a grader's page must be able to read a 401 or a 429).
   server_.set_post_routing_handler([this](const Request& req, Response& res) {
+    // The library offers byte ranges on HEAD answers; none are served (pre-routing, below).
+    if (req.method == "HEAD") res.headers.erase("Accept-Ranges");
     const std::string& origin = service_.settings().cors_origin;
     if (origin.empty()) return;
     res.set_header("Vary", "Origin");

@@ -122,6 +122,40 @@ bool param_true(const Request& req, const char* name) {
   return v == "1" || v == "true" || v == "yes";
 }
 
+ApiError ambiguous_query(std::string_view target) {
+  const size_t q = target.find('?');
+  if (q == std::string_view::npos) return {};
+  std::string_view query = target.substr(q + 1);
+  while (!query.empty()) {
+    const size_t amp = query.find('&');
+    const std::string_view piece = query.substr(0, amp);
+    const size_t eq = piece.find('=');
+    if (eq != std::string_view::npos && piece.find('=', eq + 1) != std::string_view::npos) {
+      const std::string name = httplib::detail::decode_url(std::string(piece.substr(0, eq)), true);
+      ApiError e = api_error(400, "invalid_option",
+                             "query option '" + std::string(piece.substr(0, 64)) +
+                                 "' holds a second '=': separate options with '&', and write an "
+                                 "'=' inside a value as %3D");
+      e.path = name.substr(0, 64);
+      return e;
+    }
+    if (amp == std::string_view::npos) break;
+    query.remove_prefix(amp + 1);
+  }
+  return {};
+}
+
+bool check_yes_no(const Request& req, Response& res, const char* name) {
+  if (!req.has_param(name)) return true;
+  const std::string v = req.get_param_value(name);
+  if (v == "1" || v == "true" || v == "yes" || v == "0" || v == "false" || v == "no") return true;
+  ApiError e = api_error(400, "invalid_option", std::string(name) + " must be 1, true, yes, 0, false or no, got '" +
+                                                    v.substr(0, 32) + "'");
+  e.path = name;
+  send_error(res, e);
+  return false;
+}
+
 ApiError texture_parts(const Request& req, std::initializer_list<std::string_view> own,
                        TextureFiles& out) {
   for (const auto& [name, part] : req.files) {

@@ -48,6 +48,13 @@ bool wants_ppm(const httplib::Request& req, const JobRecord& job);
 ApiError failed_job_error(const JobRecord& job);
 // ?NAME=1, true or yes.
 bool param_true(const httplib::Request& req, const char* name);
+// A query piece with two '=' (`spp=2=3`, or `seed=1;spp=9`: ';' separates nothing): cpp-httplib
+// keeps what follows the last one, a value the client never sent. A 400 invalid_option to
+// answer, or none.
+ApiError ambiguous_query(std::string_view target);
+// A yes/no query option: 1, true, yes, 0, false or no when given; anything else (wait=2) is
+// answered 400 invalid_option here, and false returned.
+bool check_yes_no(const httplib::Request& req, httplib::Response& res, const char* name);
 
 // The parts of a multipart request that are not the route's own (`own`): texture files, by
 // the path the scene names them with. A name sent twice is a 400 (which file was meant?).

@@ -237,7 +237,9 @@ nlohmann::json job_status(const JobRecord& job, int queue_position) {
   j["priority"] = to_string(job.options.priority);
   const double progress = rendered_fraction(job);
   j["progress"] = progress;
-  j["queue_position"] = queue_position;
+  // From 1 while queued, 0 after: a worker may take the job between the record's reading
+  // and the queue's, and "queued, position 0" would be neither.
+  j["queue_position"] = job.state == JobState::queued ? std::max(queue_position, 1) : 0;
   j["created_at"] = iso_or_null(job.created_ms);
   j["started_at"] = iso_or_null(job.started_ms);
   j["finished_at"] = iso_or_null(job.finished_ms);

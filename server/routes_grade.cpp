@@ -214,9 +214,13 @@ void post_grade(Service& svc, const Request& req, Response& res) {
   Format format = Format::json;
   if (auto it = fields.find("format"); it != fields.end()) {
     auto f = parse_format(it->second);
-    if (!f)
-      return send_error(res, 400, "invalid_option",
-                        "format must be gradescope, prairielearn, autolab, junit, json, html or md");
+    if (!f) {
+      ApiError e = api_error(400, "invalid_option",
+                             "format must be gradescope, prairielearn, autolab, junit, json, html "
+                             "or md, got '" + it->second.substr(0, 32) + "'");
+      e.path = "format";
+      return send_error(res, e);
+    }
     format = *f;
   }
   if (!req.is_multipart_form_data())

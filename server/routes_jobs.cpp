@@ -112,6 +112,7 @@ void get_job_image(Service& svc, const Request& req, Response& res) {
 }
 
 void get_job_events(Service& svc, const Request& req, Response& res) {
+  if (!check_query(req, res, "GET /jobs/ID/events", {})) return;
   auto job = svc.find(req.matches[1]);
   if (!job) return send_error(res, 404, "not_found", "no job " + req.matches[1].str());
   auto slot = svc.take_slot(Slot::Kind::stream);

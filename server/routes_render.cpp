@@ -61,6 +61,7 @@ bool answer_when_final(Service& svc, const Request& req, Response& res, const Jo
 }  // namespace
 
 void post_render(Service& svc, const Request& req, Response& res) {
+  if (!check_yes_no(req, res, "wait")) return;
   std::string text;
   TextureFiles textures;
   if (req.has_param("sample")) {
@@ -121,7 +122,7 @@ void post_render(Service& svc, const Request& req, Response& res) {
   const JobRecord job = svc.find(submitted.id).value_or(submitted);  // a worker may have started it
   Json body = {{"id", job.id},
                {"state", to_string(job.state)},
-               {"queue_position", svc.queue_position(job.id)},
+               {"queue_position", svc.status(job)["queue_position"]},
                {"links",
                 {{"self", "/jobs/" + job.id},
                  {"image", "/jobs/" + job.id + "/image"},

@@ -175,6 +175,20 @@ TEST(Assignment, ReadsTestsWithDefaultsFromTheTop) {
   }
 }
 
+// Whole numbers are options as written: spp 100000 was read as "1e+05" and refused as not an
+// integer, and a 64-bit seed lost its last digit.
+TEST(Assignment, WholeNumberOptionsAreReadAsWritten) {
+  Assignment a = parse_ok(R"({"name": "x", "options": {"spp": 100000, "seed": 18446744073709551615},
+      "tests": [{"name": "a", "scene": "a.txt", "options": {"width": 40000, "max_dist": 12.5}}]})");
+  ASSERT_EQ(a.tests.size(), 1u);
+  std::map<std::string, std::string> text;
+  for (const auto& o : a.tests[0].options) text[o.name] = o.value;
+  EXPECT_EQ(text["spp"], "100000");
+  EXPECT_EQ(text["seed"], "18446744073709551615");
+  EXPECT_EQ(text["width"], "40000");
+  EXPECT_EQ(text["max_dist"], "12.5");
+}
+
 TEST(Assignment, ErrorsArePlacedByTheirJsonPath) {
   EXPECT_EQ(first_error(R"({"tests": [{"name": "a", "scene": "a.txt"}]})"),
             "/name: missing: the assignment's name");

@@ -362,6 +362,14 @@ TEST(JsonScene, ReportsAnInvalidMaterialName) {
   EXPECT_TRUE(is_diag(d, "bad-name", "/materials/1 bad", "invalid material name \"1 bad\""));
 }
 
+// Only the one camera under "camera" goes unnamed; under "cameras" its key is its name.
+TEST(JsonScene, ReportsACameraWithAnEmptyKey) {
+  Diagnostic d = single_error(R"({"cameras": {"": {"pixeldim": [8, 6], "worlddim": [8, 6],
+      "viewpoint": [4, 3, 5]}}, "materials": {"m": {}}})");
+  EXPECT_EQ(d.code, "bad-name");
+  EXPECT_EQ(d.where.path, "/cameras/");
+}
+
 TEST(JsonScene, EscapesSlashesAndTildesInPaths) {
   Diagnostic d =
       single_error(R"({"camera": {"pixeldim": [8, 6], "worlddim": [8, 6], "viewpoint": [4, 3, 5]},

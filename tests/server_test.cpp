@@ -31,6 +31,7 @@
 #include <nlohmann/json.hpp>
 
 #include "http_api.h"
+#include "job_record.h"
 #include "rayfarm/compare.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/load.h"
@@ -1496,6 +1497,18 @@ TEST(ServerRoster, ParseErrorsArePlaced) {
   EXPECT_EQ(errors[3], "class.txt:4: unknown field 'colour=red' (NAME TOKEN [max_jobs=N])");
 }
 
+// A worker may take a job between the record's reading and the queue's: a queued job is
+// never shown at position 0, nor a started one at any other.
+TEST(JobStatus, AQueuedJobIsAtPositionOneOrLater) {
+  JobRecord job;
+  job.id = std::string(32, 'a');
+  job.state = JobState::queued;
+  EXPECT_EQ(job_status(job, 0)["queue_position"], 1);
+  EXPECT_EQ(job_status(job, 3)["queue_position"], 3);
+  job.state = JobState::running;
+  EXPECT_EQ(job_status(job, 2)["queue_position"], 0);
+}
+
 // ---- POST /grade -------------------------------------------------------------------------
 
 constexpr const char* kAssignment = R"({"name": "Lab", "profile": "cpsc102", "tests": [
@@ -1545,6 +1558,10 @@ TEST(ServerGrade, AnUploadedAssignmentIsGradedInThePlatformsFormat) {
   ASSERT_TRUE(odd);
   EXPECT_EQ(odd->status, 400);
   EXPECT_EQ(error_of(odd)["code"], "invalid_option");
+  auto xml = c->Post("/grade?format=xml", items);
+  ASSERT_TRUE(xml);
+  EXPECT_EQ(xml->status, 400);
+  EXPECT_EQ(error_of(xml)["path"], "format");
   // Two images under one name: which to grade is no one's guess.
   items.push_back({"spheres.png", lab_file("students/dee/spheres.png"), "spheres.png", "image/png"});
   auto twice = c->Post("/grade", items);
@@ -2599,6 +2616,15 @@ TEST(ServerHardening, ASingleRangeGetsTheWholeImage) {
   ASSERT_TRUE(r);
   EXPECT_EQ(r->status, 200);
   EXPECT_EQ(r->body, done->body);
+  EXPECT_FALSE(r->has_header("Accept-Ranges"));
+  // Nor are they offered on a HEAD answer (the library offered them there).
+  for (const std::string& path :
+       std::vector<std::string>{"/healthz", "/jobs/" + done->get_header_value("X-Job-Id") + "/image"}) {
+    auto head = c->Head(path.c_str());
+    ASSERT_TRUE(head);
+    EXPECT_EQ(head->status, 200) << path;
+    EXPECT_FALSE(head->has_header("Accept-Ranges")) << path;
+  }
 }
 
 TEST(ServerHardening, HandlerExceptionTextIsNotSent) {
@@ -3007,6 +3033,10 @@ TEST(ServerQuery, EveryRouteRefusesOptionsItDoesNotTake) {
       {"/jobs?limit=5", "unknown option 'limit'"},
       {"/samples?all=1", "unknown option 'all'"},
       {"/healthz?x=1", "unknown option 'x'"},
+      {"/jobs/" + id + "/events?foo=bar", "GET /jobs/ID/events; it takes no options"},
+      // cpp-httplib read these as format=ppm and format=png: values never sent.
+      {"/jobs/" + id + "/image?format=png=ppm", "holds a second '='"},
+      {"/jobs/" + id + "/image?partial=1;format=ppm", "holds a second '='"},
   };
   for (const Case& k : cases) {
     SCOPED_TRACE(k.path);
@@ -3017,6 +3047,16 @@ TEST(ServerQuery, EveryRouteRefusesOptionsItDoesNotTake) {
     EXPECT_NE(error_of(bad)["message"].get<std::string>().find(k.needle), std::string::npos)
         << bad->body;
   }
+  // A yes/no option with another value is refused where it used to mean no: wait=2 did not
+  // wait. And the path names the option.
+  auto wait2 = c->Post("/render?wait=2", kScene, "text/plain");
+  ASSERT_TRUE(wait2);
+  EXPECT_EQ(wait2->status, 400);
+  EXPECT_EQ(error_of(wait2)["path"], "wait");
+  auto twice = c->Post("/render?spp=2=3", kScene, "text/plain");
+  ASSERT_TRUE(twice);
+  EXPECT_EQ(twice->status, 400);
+  EXPECT_EQ(error_of(twice)["path"], "spp");
   // What the routes do take still works.
   auto ppm = c->Get("/jobs/" + id + "/image?format=ppm");
   ASSERT_TRUE(ppm);

@@ -53,8 +53,15 @@ class JsonSceneReader {
         read_entity(EntityKind::camera, "", value, path, scene);
       } else if (key == "cameras") {
         if (expect(value.is_object(), value, "an object of named cameras", path))
-          for (auto& [name, cam] : value.items())
+          for (auto& [name, cam] : value.items()) {
+            // (Only the one camera under "camera" goes unnamed.)
+            if (name.empty())
+              diags_.error("bad-name",
+                           "a camera under \"cameras\" needs a name (its key); one unnamed "
+                           "camera goes under \"camera\"",
+                           at(child(path, name)));
             read_entity(EntityKind::camera, name, cam, child(path, name), scene);
+          }
       } else if (key == "materials") {
         if (expect(value.is_object(), value, "an object of named materials", path))
           for (auto& [name, mat] : value.items())
@@ -258,12 +265,8 @@ class JsonSceneReader {
         text = v.get<std::string>();
       else if (v.is_boolean())
         text = v.get<bool>() ? "true" : "false";
-      else if (v.is_number_unsigned())
-        text = std::to_string(v.get<std::uint64_t>());
-      else if (v.is_number_integer())
-        text = std::to_string(v.get<std::int64_t>());
       else if (v.is_number())
-        text = format_number(v.get<double>());
+        text = json_number_text(v);
       else if (v.is_array() && v.size() <= 3) {
         for (const Json& c : v) {
           if (!c.is_number()) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "rayfarm/json_scene.h"
+#include "rayfarm/options.h"
 
 namespace rayfarm {
 namespace {
@@ -152,6 +153,12 @@ std::string json_pointer_token(std::string_view key) {
       out += c;
   }
   return out;
+}
+
+std::string json_number_text(const Json& number) {
+  if (number.is_number_unsigned()) return std::to_string(number.get<std::uint64_t>());
+  if (number.is_number_integer()) return std::to_string(number.get<std::int64_t>());
+  return format_number(number.get<double>());
 }
 
 std::optional<Json> parse_json_tree(std::string_view text, Diagnostics& diags) {

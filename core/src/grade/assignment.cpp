@@ -74,7 +74,7 @@ class Reader {
       std::string text;
       if (it->is_string()) text = it->get<std::string>();
       else if (it->is_boolean()) text = it->get<bool>() ? "1" : "0";
-      else if (it->is_number()) text = format_number(it->get<double>());
+      else if (it->is_number()) text = json_number_text(*it);
       else if (it->is_array()) {  // a colour
         for (const Json& e : *it) text += (text.empty() ? "" : ",") + (e.is_number() ? format_number(e.get<double>()) : std::string("?"));
       } else {
