@@ -50,6 +50,12 @@ std::string write_and_close(std::FILE* f, const void* data, size_t size) {
 
 }  // namespace
 
+namespace {
+bool stdout_failed = false;
+}  // namespace
+
+bool stdout_failure_said() { return stdout_failed; }
+
 bool write_output(const std::string& path, const void* data, size_t size) {
   namespace fs = std::filesystem;
   auto fail = [&](const std::string& why) {
@@ -59,6 +65,7 @@ bool write_output(const std::string& path, const void* data, size_t size) {
   };
   if (path == "-") {
     const bool ok = std::fwrite(data, 1, size, stdout) == size && std::fflush(stdout) == 0;
+    stdout_failed = !ok;
     return ok || fail(std::strerror(errno));
   }
   std::error_code ec;

@@ -54,6 +54,8 @@ std::optional<std::string> read_input(const std::string& path, std::string* why 
 // file's permissions kept), in place to a device, pipe or socket (/dev/null stays a device),
 // or to standard output for "-". False, with the reason said on stderr, when it cannot.
 bool write_output(const std::string& path, const void* data, size_t size);
+// Whether write_output has already said that standard output could not be written.
+bool stdout_failure_said();
 
 // `--spp 4`, `--max-depth 3` (or `--max_depth`), ...: every option of the table as a flag.
 // Values are kept as text, in the order of the table, to be applied after the scene's own.

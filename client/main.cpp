@@ -1,5 +1,8 @@
 // rayfarm: the command line (docs/cli.md). Renders locally with no server, or as rayfarmd's
 // client; checks, converts and compares.
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <map>
 
@@ -54,6 +57,20 @@ int main(int argc, char** argv) {
     return kBadInput;
   }
   for (auto& [sub, run] : runners)
-    if (sub->parsed()) return run();
+    if (sub->parsed()) {
+      const int code = run();
+      // What a command printed (trace, compare, check, report) is its answer: one lost to a
+      // full disk or a closed pipe is an error, not a quiet exit 0 (or 1).
+      errno = 0;
+      std::cout.flush();
+      if (!std::cout || std::fflush(stdout) != 0 || std::ferror(stdout)) {
+        const int err = errno;
+        if (!stdout_failure_said())
+          std::cerr << "rayfarm: cannot write to standard output"
+                  << (err ? std::string(": ") + std::strerror(err) : std::string()) << "\n";
+        return code == kOk || code == kNo ? kBadInput : code;
+      }
+      return code;
+    }
   return kBadInput;
 }

@@ -579,6 +579,22 @@ TEST(CheckCli, ErrorsComeInLineOrderWithACount) {
 }
 
 // render refuses an image too large to hold; check says so first, with the camera's place.
+// A command's printed answer that cannot be written is an error: trace, check and compare
+// exited 0 with their output lost to a full disk.
+TEST(CheckCli, StandardOutputThatCannotBeWrittenIsAnError) {
+  REQUIRE_CLIENT();
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const std::string cho = q(RAYFARM_SOURCE_DIR "/scenes/cho.txt");
+  for (const std::string& args : std::vector<std::string>{" trace " + cho + " 1 1", " check " + cho,
+                                                         " trace " + cho + " 1 1 --json",
+                                                         " render -q " + cho + " -o -"}) {
+    SCOPED_TRACE(args);
+    Outcome r = run(kRayfarm + args + " 2>&1 >/dev/full");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_EQ(r.out, "rayfarm: cannot write to standard output: No space left on device\n");
+  }
+}
+
 TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
   REQUIRE_CLIENT();
   const fs::path dir =

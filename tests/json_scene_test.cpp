@@ -404,6 +404,18 @@ TEST(JsonScene, FormatsAPathErrorForTheUser) {
 
 // --- Syntax ---------------------------------------------------------------------------------
 
+// The reader stopped at a NUL byte: the rest of the file, whatever it held, went unread.
+TEST(JsonScene, ANulByteIsAnErrorWhereItIs) {
+  const std::string text = std::string("{\"camera\": {\"pixeldim\": [4, 3], \"worlddim\": [8, 6], "
+                                       "\"viewpoint\": [4, 3, 5]}}\n") +
+                           '\0' + " \"objects\": 5, garbage {{{";
+  Diagnostic d = single_error(text);
+  EXPECT_EQ(d.code, "json-syntax");
+  EXPECT_EQ(d.where.line, 2);
+  EXPECT_EQ(d.where.column, 1);
+  EXPECT_NE(d.message.find("NUL"), std::string::npos) << d.message;
+}
+
 TEST(JsonScene, ReportsASyntaxErrorWithLineAndColumn) {
   Diagnostic d = single_error("{\n  \"camera\": {,\n}");
   EXPECT_EQ(d.code, "json-syntax");

@@ -162,6 +162,13 @@ std::string json_number_text(const Json& number) {
 }
 
 std::optional<Json> parse_json_tree(std::string_view text, Diagnostics& diags) {
+  // nlohmann's reader takes a NUL byte for the end of the text: what follows it would go
+  // unread, unchecked.
+  if (const size_t nul = text.find('\0'); nul != std::string_view::npos) {
+    diags.error("json-syntax", "invalid JSON: a NUL byte (the file is not plain text)",
+                position_of_offset(text, nul));
+    return std::nullopt;
+  }
   TreeBuilder builder;
   bool parsed = false;
   try {
