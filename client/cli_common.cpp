@@ -117,9 +117,10 @@ std::string lower_extension(const std::string& path) {
 
 }  // namespace
 
-ImageFormat output_format(const std::string& out, const std::string& format) {
+ImageFormat output_format(const std::string& out, const std::string& format, ImageFormat otherwise) {
   if (!format.empty()) return format == "ppm" ? ImageFormat::ppm : ImageFormat::png;
-  return lower_extension(out) == ".ppm" ? ImageFormat::ppm : ImageFormat::png;
+  const std::string ext = lower_extension(out);
+  return ext == ".ppm" ? ImageFormat::ppm : ext == ".png" ? ImageFormat::png : otherwise;
 }
 
 std::string check_output(const std::string& out, const std::string& format) {

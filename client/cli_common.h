@@ -43,8 +43,10 @@ std::string usage_message(const CLI::App& app, const CLI::ParseError& e);
 // `format` is --format's value, empty when not given.
 std::string check_output(const std::string& out, const std::string& format);
 // The encoding of an image output: `format` ("png" or "ppm") when given, else the name's
-// extension in any case (".ppm", ".PPM"), else PNG; the one rule of render, wait and compare.
-ImageFormat output_format(const std::string& out, const std::string& format = "");
+// extension in any case (".ppm", ".PPM"), else `otherwise` (render: the scene's own render
+// object's); the one rule of render, wait and compare.
+ImageFormat output_format(const std::string& out, const std::string& format = "",
+                          ImageFormat otherwise = ImageFormat::png);
 
 // Reads a file, or standard input for "-", whole: at most `limit` bytes (read_file.h). nullopt
 // on failure, with the reason in `why` or, without it, said on stderr.

@@ -40,9 +40,12 @@ std::string default_output(const std::string& scene) {
   return std::filesystem::path(scene).filename().replace_extension(".png").string();
 }
 
-ImageFormat format_for(const std::string& out, const OptionFlags& flags) {
+// --format, else the output's extension, else (standard output, a name without .png or .ppm)
+// the scene's own render object's format, else PNG.
+ImageFormat format_for(const std::string& out, const OptionFlags& flags,
+                       ImageFormat scene_format = ImageFormat::png) {
   const auto given = flags.values.find("format");
-  return output_format(out, given == flags.values.end() ? "" : given->second);
+  return output_format(out, given == flags.values.end() ? "" : given->second, scene_format);
 }
 
 // "6.79 Mrays/s", "1.2 k primary", "12 rays/s", "0 shadow".
@@ -146,7 +149,7 @@ Runner add_render(CLI::App& app) {
     auto options = resolve_options(*loaded->scene, args->flags);
     if (!options) return kBadInput;
     const std::string& out = out_path;
-    options->format = format_for(out, args->flags);
+    options->format = format_for(out, args->flags, options->format);
     {
       // What `check` would warn about (a sphere behind the eye, a light inside an object):
       // a black image with no word is the worst answer to such a scene. Its errors (an image

@@ -595,6 +595,20 @@ TEST(CheckCli, StandardOutputThatCannotBeWrittenIsAnError) {
   }
 }
 
+// A JSON scene's own format is the encoding where the output's name says none (standard
+// output): it was PNG whatever the scene asked.
+TEST(CheckCli, TheScenesFormatEncodesStandardOutput) {
+  REQUIRE_CLIENT();
+  const fs::path scene = fs::temp_directory_path() / ("rayfarm-cli-fmt-" + std::to_string(getpid()) + ".json");
+  std::ofstream(scene) << R"({"camera": {"pixeldim": [4, 3], "worlddim": [8, 6], "viewpoint": [4, 3, 5]},
+                              "render": {"format": "ppm"}})";
+  EXPECT_EQ(run(kRayfarm + " render -q " + q(scene.string()) + " -o - | head -c 2").out, "P6");
+  // The flag and a named file's extension still come first.
+  EXPECT_EQ(run(kRayfarm + " render -q " + q(scene.string()) + " -o - --format png | head -c 4 | tail -c 3").out,
+            "PNG");
+  fs::remove(scene);
+}
+
 TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
   REQUIRE_CLIENT();
   const fs::path dir =
