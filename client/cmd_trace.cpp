@@ -36,7 +36,14 @@ Runner add_trace(CLI::App& app) {
   app.add_option("x", args->x, "pixel column, 0 at the left")->required()->check(decimal);
   app.add_option("y", args->y, "pixel row, 0 at the top")->required()->check(decimal);
   app.add_flag("--json", args->json, "print the explanation as JSON");
-  args->flags.add_to(app, {{"format", "trace prints the pixel's bytes, not an image"}});
+  // A render with these stops where its whole image's estimate says: one pixel cannot know
+  // that, and its bytes would not be the render's.
+  const char* stop_rule =
+      "trace follows a set number of samples; give the --spp the render reached (its summary "
+      "line says spp N/M)";
+  args->flags.add_to(app, {{"format", "trace prints the pixel's bytes, not an image"},
+                           {"target_error", stop_rule},
+                           {"time_limit", stop_rule}});
   app.footer(
       help_footer("  rayfarm trace scenes/cho.txt 400 300\n"
                   "  rayfarm trace scenes/cho.txt 400 300 --profile cpsc102 --json\n",

@@ -169,8 +169,7 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
   }
   auto camera = scene->find_camera(options.camera);
   if (!camera) {
-    std::string names;
-    for (const Camera& c : scene->cameras) names += (names.empty() ? "" : ", ") + c.name;
+    const std::string names = scene->camera_names();
     ApiError e = api_error(400, "invalid_option",
                            "no camera named '" + options.camera.substr(0, 64) + "'; the scene's cameras: " + names);
     e.path = "camera";

@@ -490,6 +490,13 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
   usage("trace " + scene + " 1 1 --format ppm",
         "--format: trace prints the pixel's bytes, not an image");
   // A pixel is decimal: 010 is pixel 10 (not octal 8), 0x10 is refused.
+  // Its bytes would not be the render's: the render stops where the whole image says.
+  usage("trace " + scene + " 1 1 --target-error 2",
+        "--target-error: trace follows a set number of samples; give the --spp the render reached "
+        "(its summary line says spp N/M)");
+  usage("trace " + scene + " 1 1 --time-limit 1",
+        "--time-limit: trace follows a set number of samples; give the --spp the render reached "
+        "(its summary line says spp N/M)");
   usage("trace " + scene + " 0x10 1", "x: '0x10' is not a pixel number (decimal digits, from 0)");
   EXPECT_EQ(run(kRayfarm + " trace " + scene + " 010 0").out.rfind("Pixel (10, 0) of ", 0), 0u);
   // Too large for any image is said so, not "not a number".

@@ -285,6 +285,17 @@ TEST(ImageIo, EmptyIdatChunksAreSkipped) {
   decode_error(with_empty.substr(0, 33 + 8));  // the empty IDAT cut before its CRC
 }
 
+// A PNG cut after its header, or without its IEND chunk, says why it cannot be read (the
+// message ended at "cannot decode PNG: ").
+TEST(ImageIo, ACutPngSaysSo) {
+  const std::string png = make_png(2, 2, 8, 2, std::string("\0abcdef\0ghijkl", 14));
+  for (const std::string& cut : {png.substr(0, 33), png.substr(0, png.size() - 12)}) {
+    const std::string why = decode_error(cut);
+    EXPECT_EQ(why.rfind("cannot decode PNG: ", 0), 0u) << why;
+    EXPECT_GT(why.size(), std::string("cannot decode PNG: ").size() + 5) << why;
+  }
+}
+
 TEST(ImageIo, PngDataInflatingFarBeyondItsHeaderIsRefused) {
   std::string rows(16 << 20, '\0');  // 16 MiB of scanlines for a 1x1 image
   EXPECT_EQ(decode_error(make_png(1, 1, 8, 2, rows)),

@@ -191,6 +191,16 @@ TEST(Camera, NamedCameraIsUsedAndUnknownNameIsAnError) {
   EXPECT_EQ(img.width, 0);
   EXPECT_NE(error.find("no camera named 'third'"), std::string::npos);
   EXPECT_NE(error.find("first, second"), std::string::npos);
+  // Unnamed cameras are counted, not listed as empty names ("(cameras: b, )").
+  Scene two = scene_from(R"(
+    camera { pixeldim 2 2 worlddim 2 2 viewpoint 1 1 5 }
+    camera b { pixeldim 2 2 worlddim 2 2 viewpoint 1 1 5 }
+    camera { pixeldim 2 2 worlddim 2 2 viewpoint 1 1 5 }
+    material m { ambient 1 }
+    sphere { material m center 1 1 -5 radius 1 })");
+  EXPECT_EQ(two.camera_names(), "b; 2 unnamed");
+  render_image(two, o, 1, nullptr, {}, nullptr, &error);
+  EXPECT_EQ(error, "no camera named 'third' (cameras: b; 2 unnamed)");
 }
 
 }  // namespace

@@ -198,6 +198,9 @@ struct Scene {
 
   // Index of the camera named `name` (first when empty), or nullopt.
   std::optional<int> find_camera(std::string_view name) const;
+  // The cameras a message lists when a name finds none: "first, second", and how many have
+  // no name ("b; 2 unnamed": those are chosen only as the first, the default).
+  std::string camera_names() const;
   // How many objects have shape S.
   template <class S>
   std::size_t count() const {

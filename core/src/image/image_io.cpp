@@ -95,7 +95,10 @@ std::optional<Image> decode_png(std::string_view bytes, std::string* error, long
   if (png.rgb.empty()) {
     // With the limit above, running out of memory almost always means hostile sizes.
     if (png.error == "outofmem") return fail(error, "cannot decode PNG: data larger than its size");
-    return fail(error, "cannot decode PNG: " + png.error);
+    // (stb_image names no reason for some damage: the data cut short, the IEND chunk missing.)
+    return fail(error, "cannot decode PNG: " +
+                           (png.error.empty() ? std::string("the file is cut short or damaged")
+                                              : png.error));
   }
   Image image;
   image.width = png.width;

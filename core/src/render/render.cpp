@@ -267,8 +267,7 @@ std::optional<int> check_render(const Scene& scene, const RenderOptions& options
   auto camera = scene.find_camera(options.camera);
   if (!camera) {
     if (error) {
-      std::string names;
-      for (const Camera& c : scene.cameras) names += (names.empty() ? "" : ", ") + c.name;
+      const std::string names = scene.camera_names();
       *error = "no camera named '" + options.camera + "'" +
                (names.empty() ? "" : " (cameras: " + names + ")");
     }

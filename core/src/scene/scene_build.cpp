@@ -298,6 +298,19 @@ std::optional<int> Scene::find_camera(std::string_view name) const {
   return std::nullopt;
 }
 
+std::string Scene::camera_names() const {
+  std::string names;
+  int unnamed = 0;
+  for (const Camera& c : cameras) {
+    if (c.name.empty())
+      ++unnamed;
+    else
+      names += (names.empty() ? "" : ", ") + c.name;
+  }
+  if (unnamed > 0) names += (names.empty() ? "" : "; ") + std::to_string(unnamed) + " unnamed";
+  return names;
+}
+
 std::optional<Scene> build_scene(const SceneDesc& desc, Diagnostics& diags) {
   return SceneBuilder(diags).build(desc);
 }
