@@ -73,14 +73,17 @@ class FolderFiles final : public Files {
 // A scene's textures resolve against the scene's own folder (a plain join, checked by Files).
 class SceneTextures final : public ResourceResolver {
  public:
-  SceneTextures(const Files& files, std::string folder) : files_(files), folder_(std::move(folder)) {}
+  SceneTextures(const Files& files, std::string folder, long long max_pixels)
+      : files_(files), folder_(std::move(folder)), max_pixels_(max_pixels) {}
   std::optional<std::string> read(const std::string& path, std::string& error) const override {
     return files_.read(folder_.empty() ? path : folder_ + "/" + path, error);
   }
+  long long max_pixels() const override { return max_pixels_; }
 
  private:
   const Files& files_;
   std::string folder_;
+  long long max_pixels_;
 };
 
 class ServerBackend final : public Backend {
@@ -96,7 +99,8 @@ class ServerBackend final : public Backend {
       return std::nullopt;
     }
     const size_t slash = path.find_last_of('/');
-    const SceneTextures textures(scenes_, slash == std::string::npos ? "" : path.substr(0, slash));
+    const SceneTextures textures(scenes_, slash == std::string::npos ? "" : path.substr(0, slash),
+                                 svc_.settings().max_pixels);
     const LoadGate::Pass pass = svc_.enter_load(text->size());
     return load_scene_files(path, *text, textures, path, error);
   }

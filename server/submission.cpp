@@ -136,7 +136,10 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
     metrics_.rejected(e.limit);
     return {std::nullopt, e};
   }
-  const LoadGate::Pass pass = enter_load(scene_text.size());
+  // Textures decode to far more than they upload (a 200 KB PNG to 48 MB at the pixel limit,
+  // 16 of them to a request): a scene with any is read in turn, as a large text is.
+  const LoadGate::Pass pass =
+      enter_load(scene_text.size() + (textures.empty() ? 0 : LoadGate::kSmall + 1));
   LoadedScene loaded = load_scene(scene_text);
   if (!loaded.scene) return {std::nullopt, scene_error(loaded.diags)};
   if (ApiError e = resolve_uploads(*loaded.scene, textures)) {

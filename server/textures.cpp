@@ -59,7 +59,7 @@ ApiError Service::resolve_uploads(Scene& scene, const TextureFiles& files) const
                                           : ""));
   }
   Diagnostics diags;
-  if (!resolve_textures(scene, UploadedTextures(files), diags)) return scene_error(diags);
+  if (!resolve_textures(scene, UploadedTextures(files, settings_.max_pixels), diags)) return scene_error(diags);
   return {};
 }
 
@@ -87,7 +87,7 @@ void Service::release_textures(const std::vector<std::string>& hashes) {
 
 std::shared_ptr<const Scene> Service::reload_scene(const std::string& text,
                                                    const std::vector<std::string>& hashes) {
-  const LoadGate::Pass pass = enter_load(text.size());
+  const LoadGate::Pass pass = enter_load(text.size() + (hashes.empty() ? 0 : LoadGate::kSmall + 1));
   LoadedScene loaded = load_scene(text, LoadDetail::scene);
   if (!loaded.scene || loaded.scene->textures.size() != hashes.size()) return nullptr;
   TextureFiles files;
@@ -97,7 +97,7 @@ std::shared_ptr<const Scene> Service::reload_scene(const std::string& text,
     files[loaded.scene->textures[i].path] = std::move(*bytes);
   }
   Diagnostics diags;
-  if (!resolve_textures(*loaded.scene, UploadedTextures(files), diags)) return nullptr;
+  if (!resolve_textures(*loaded.scene, UploadedTextures(files, settings_.max_pixels), diags)) return nullptr;
   return std::make_shared<const Scene>(std::move(*loaded.scene));
 }
 

@@ -17,11 +17,14 @@ using TextureFiles = std::map<std::string, std::string>;
 
 class UploadedTextures final : public ResourceResolver {
  public:
-  explicit UploadedTextures(const TextureFiles& files) : files_(files) {}
+  UploadedTextures(const TextureFiles& files, long long max_pixels)
+      : files_(files), max_pixels_(max_pixels) {}
   std::optional<std::string> read(const std::string& path, std::string& error) const override;
+  long long max_pixels() const override { return max_pixels_; }
 
  private:
   const TextureFiles& files_;
+  long long max_pixels_;
 };
 
 }  // namespace rayfarm::server

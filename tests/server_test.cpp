@@ -1899,6 +1899,19 @@ TEST(ServerTextures, TooManyOrTooLargeTexturesAre422) {
   ASSERT_TRUE(ok);
   EXPECT_EQ(ok->status, 202) << ok->body;
 
+  // A small file declaring more pixels than the server renders is refused by its header, at
+  // the place that names it: a 200 KB PNG of 8192 x 8192 took 300 MB to decode.
+  Settings few = test_settings();
+  few.max_pixels = 16;
+  TestServer narrow(few);
+  auto wide = narrow.client()->Post("/render", upload(scene, {{"big.ppm", "P6\n5 4\n255\n" + std::string(60, 'x')}}));
+  ASSERT_TRUE(wide);
+  EXPECT_EQ(wide->status, 400) << wide->body;
+  EXPECT_TRUE(contains(error_of(wide)["message"], "big.ppm")) << wide->body;
+  auto fits = narrow.client()->Post("/render", upload(scene, {{"big.ppm", texture_ppm(1)}}));
+  ASSERT_TRUE(fits);
+  EXPECT_NE(fits->status, 400) << fits->body;
+
   // The body limit still holds for the request as a whole.
   Settings small = test_settings();
   small.max_body_bytes = 4096;

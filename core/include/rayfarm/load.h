@@ -33,6 +33,7 @@ class RecordingResolver final : public ResourceResolver {
  public:
   explicit RecordingResolver(const ResourceResolver& inner) : inner_(inner) {}
   std::optional<std::string> read(const std::string& path, std::string& error) const override;
+  long long max_pixels() const override { return inner_.max_pixels(); }
   const std::map<std::string, std::string>& files() const { return files_; }
 
  private:

@@ -15,6 +15,7 @@
 
 #include "rayfarm/diagnostic.h"
 #include "rayfarm/image.h"
+#include "rayfarm/image_io.h"
 #include "rayfarm/options.h"
 #include "rayfarm/scene_desc.h"
 
@@ -220,6 +221,9 @@ class ResourceResolver {
  public:
   virtual ~ResourceResolver() = default;
   virtual std::optional<std::string> read(const std::string& path, std::string& error) const = 0;
+  // The most pixels a texture may have, by its header, before anything is decoded: a server
+  // takes none larger than the images it renders (a 200 KB PNG can declare 8192 x 8192).
+  virtual long long max_pixels() const { return kMaxDecodePixels; }
 };
 
 // Checks all rules of the format and builds the scene. Every problem found is added to

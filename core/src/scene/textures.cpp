@@ -18,7 +18,7 @@ bool resolve_textures(Scene& scene, const ResourceResolver& resolver, Diagnostic
       ok = false;
       continue;
     }
-    std::optional<Image> image = decode_image(*bytes, &error);
+    std::optional<Image> image = decode_image(*bytes, &error, resolver.max_pixels());
     if (!image) {
       diags.error("texture-invalid", what + " is not a readable image: " + error, t.path_where);
       ok = false;
