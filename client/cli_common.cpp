@@ -123,6 +123,17 @@ ImageFormat output_format(const std::string& out, const std::string& format, Ima
   return ext == ".ppm" ? ImageFormat::ppm : ext == ".png" ? ImageFormat::png : otherwise;
 }
 
+std::string check_not_input(const std::string& out, std::initializer_list<std::string> inputs) {
+  if (out == "-") return "";
+  for (const std::string& in : inputs) {
+    std::error_code ec;
+    if (in != "-" && std::filesystem::equivalent(out, in, ec) && !ec)
+      return "'" + out + "' is the input " + in + " itself: writing it would lose that file; " +
+             "give the output another name";
+  }
+  return "";
+}
+
 std::string check_output(const std::string& out, const std::string& format) {
   if (out == "-") {
     if (isatty(STDOUT_FILENO))

@@ -42,6 +42,9 @@ std::string usage_message(const CLI::App& app, const CLI::ParseError& e);
 // says another format, or image bytes sent to a terminal. Empty when the output is fine;
 // `format` is --format's value, empty when not given.
 std::string check_output(const std::string& out, const std::string& format);
+// Refuses an output that is one of the command's inputs (`render scene.png` named its image
+// after its scene; `compare a.png b.png --diff a.png`): the input would be lost. Empty when not.
+std::string check_not_input(const std::string& out, std::initializer_list<std::string> inputs);
 // The encoding of an image output: `format` ("png" or "ppm") when given, else the name's
 // extension in any case (".ppm", ".PPM"), else `otherwise` (render: the scene's own render
 // object's); the one rule of render, wait and compare.

@@ -55,10 +55,11 @@ Runner add_compare(CLI::App& app) {
       return kBadInput;
     }
     if (!args->diff.empty())
-      if (std::string bad = check_output(args->diff, ""); !bad.empty()) {
-        std::cerr << "rayfarm: --diff: " << bad << "\n";
-        return kBadInput;
-      }
+      for (const std::string& bad : {check_output(args->diff, ""), check_not_input(args->diff, {args->a, args->b})})
+        if (!bad.empty()) {
+          std::cerr << "rayfarm: --diff: " << bad << "\n";
+          return kBadInput;
+        }
     std::optional<Image> images[2];
     const std::string* names[2] = {&args->a, &args->b};
     for (int i = 0; i < 2; ++i) {

@@ -124,10 +124,12 @@ Runner add_render(CLI::App& app) {
     if (!text) return kBadInput;
     std::string out_path = args->out.empty() ? default_output(args->scene) : args->out;
     if (!args->detach)
-      if (std::string bad = check_output(out_path, format_flag(args->flags)); !bad.empty()) {
-        std::cerr << "rayfarm: " << bad << "\n";
-        return kBadInput;
-      }
+      for (const std::string& bad : {check_output(out_path, format_flag(args->flags)),
+                                     check_not_input(out_path, {args->scene})})
+        if (!bad.empty()) {
+          std::cerr << "rayfarm: " << bad << "\n";
+          return kBadInput;
+        }
     if (!url.empty()) {
       if (std::string bad = check_server_url(url); !bad.empty()) {
         std::cerr << "rayfarm: " << bad << "\n";

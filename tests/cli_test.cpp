@@ -616,6 +616,32 @@ TEST(CheckCli, TheScenesFormatEncodesStandardOutput) {
   fs::remove(scene);
 }
 
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// An output that is an input is refused, the input kept: `render scene.png` named its image
+// after the scene and wrote it over the scene.
+TEST(CheckCli, AnOutputThatIsAnInputIsRefused) {
+  REQUIRE_CLIENT();
+  const fs::path dir = fs::temp_directory_path() / ("rayfarm-cli-self-" + std::to_string(getpid()));
+  fs::create_directories(dir);
+  fs::copy_file(RAYFARM_SOURCE_DIR "/scenes/minimal.txt", dir / "scene.png");
+  const std::string before = read_file(dir / "scene.png");
+  Outcome r = run("cd " + q(dir.string()) + " && " + kRayfarm + " render scene.png 2>&1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("is the input scene.png itself"), std::string::npos) << r.out;
+  EXPECT_EQ(read_file(dir / "scene.png"), before);
+  const std::string a = q((dir / "a.png").string());
+  ASSERT_EQ(run(kRayfarm + " render -q " + q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt") + " -o " + a).code, 0);
+  const std::string image = read_file(dir / "a.png");
+  Outcome c = run(kRayfarm + " compare " + a + " " + a + " --diff " + q((dir / "." / "a.png").string()) + " 2>&1");
+  EXPECT_EQ(c.code, 2) << c.out;
+  EXPECT_EQ(read_file(dir / "a.png"), image);
+  fs::remove_all(dir);
+}
+
 TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
   REQUIRE_CLIENT();
   const fs::path dir =
