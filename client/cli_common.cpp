@@ -48,10 +48,9 @@ std::string write_and_close(std::FILE* f, const void* data, size_t size) {
   return std::strerror(written ? errno : err);
 }
 
-}  // namespace
-
-namespace {
+// Set once write_output has said that standard output could not be written.
 bool stdout_failed = false;
+
 }  // namespace
 
 bool stdout_failure_said() { return stdout_failed; }

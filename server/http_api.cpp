@@ -113,7 +113,9 @@ void HttpApi::harden() {
       return httplib::Server::HandlerResponse::Handled;
     }
     if (answer_preflight(req, res)) return httplib::Server::HandlerResponse::Handled;
-    if (ApiError e = ambiguous_query(req.target)) {
+    // (The web page and its files ignore a query: a shared link may carry one.)
+    const bool page = req.path == "/" || req.path.rfind("/web/", 0) == 0;
+    if (ApiError e = page ? ApiError{} : ambiguous_query(req.target)) {
       if (req.has_header("Transfer-Encoding") ||
           (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0"))
         GuardedServer::close_after(res);
