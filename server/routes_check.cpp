@@ -65,6 +65,11 @@ void post_check(Service& svc, const Request& req, Response& res) {
                          {"format", model ? "model" : "json"},
                          {"errors", std::move(errors)},
                          {"warnings", diagnostics_json(warnings, Severity::warning)}};
+  // At most 50 errors are listed, as the command line shows them; it also says how many.
+  if (loaded.diags.truncated()) {
+    body["error_count"] = loaded.diags.error_count();
+    if (!loaded.diags.counted_all()) body["error_count_is_a_lower_bound"] = true;
+  }
   if (loaded.scene) {
     const Scene& s = *loaded.scene;
     nlohmann::json cameras = nlohmann::json::array();

@@ -2893,6 +2893,17 @@ TEST(ServerCheck, GivesErrorsAndWarningsWithTheirPlaces) {
   EXPECT_TRUE(g["errors"].empty());
   EXPECT_EQ(g["scene"]["cameras"][0]["name"], "cam1");
   EXPECT_EQ(g["scene"]["cameras"][0]["width"], 40);
+  EXPECT_FALSE(g.contains("error_count"));
+
+  // Past 50 errors the list stops and the count says how many there were (the command line
+  // says "60 errors, only the first 50 shown"; the answer said nothing).
+  std::string many = "material m { ambient 1 }\ncamera { pixeldim 4 3 worlddim 8 6 viewpoint 4 3 5 }\n";
+  for (int i = 0; i < 60; ++i) many += "sphere { material nothing center 4 3 -5 radius 1 }\n";
+  auto crowded = c->Post("/check", many, "text/plain");
+  ASSERT_TRUE(crowded);
+  Json m = json_of(crowded);
+  EXPECT_EQ(m["errors"].size(), 50u) << crowded->body;
+  EXPECT_EQ(m["error_count"], 60) << crowded->body;
 
   auto behind = c->Post("/check", kBehindEye, "text/plain");
   ASSERT_TRUE(behind);
