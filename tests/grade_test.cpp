@@ -591,6 +591,17 @@ TEST(Formats, AProgramsOutputCannotBreakTheReport) {
   const std::string xml = write_result(r, Format::junit);
   for (unsigned char c : xml) EXPECT_TRUE(c >= 0x20 || c == '\n' || c == '\t') << int(c);
   EXPECT_NE(xml.find("run \xef\xbf\xbd"), std::string::npos);
+  // A file name the student chose, quoted in a message, is text in the Markdown a platform
+  // renders, not a tag.
+  r.tests[0].message = "your image a.ppm was not found; a file named '<img src=x onerror=alert(1)>.ppm' is there";
+  r.tests[0].hints = {{"missing_image", r.tests[0].message}};
+  // (Gradescope's extra_data keeps the message as data; its output is what the page renders.)
+  const std::string gradescope =
+      Json::parse(write_result(r, Format::gradescope))["tests"][0]["output"].get<std::string>();
+  for (const std::string& text : {write_result(r, Format::md), gradescope}) {
+    EXPECT_EQ(text.find("<img"), std::string::npos) << text;
+    EXPECT_NE(text.find("&lt;img src=x"), std::string::npos) << text;
+  }
 }
 
 TEST(Formats, BytesThatAreNotUtf8BecomeReplacementCharacters) {

@@ -97,9 +97,22 @@ std::string escape_xml(const std::string& s) {
   return out;
 }
 
-std::string md_cell(std::string s) {
+// Text for Markdown that a platform renders (Gradescope's "md"): names and messages quote the
+// student's file names, so '<' and '&' are entities and no tag of theirs reaches the page.
+std::string md_text(const std::string& s) {
   std::string out;
   for (char c : s) {
+    if (c == '<') out += "&lt;";
+    else if (c == '>') out += "&gt;";
+    else if (c == '&') out += "&amp;";
+    else out += c;
+  }
+  return out;
+}
+
+std::string md_cell(std::string s) {
+  std::string out;
+  for (char c : md_text(s)) {
     if (c == '|') out += "\\|";
     else if (c == '\n') out += ' ';
     else out += c;
@@ -118,13 +131,14 @@ std::string metrics_line(const TestResult& t) {
 
 // What a student reads for one test: the verdict, the hints, then the numbers.
 std::string feedback(const TestResult& t, bool markdown) {
-  std::string out = t.message + "\n";
+  const auto said = [&](const std::string& s) { return markdown ? md_text(s) : s; };
+  std::string out = said(t.message) + "\n";
   if (!t.hints.empty()) {
     out += markdown ? "\n**Hints**\n\n" : "\nHints:\n";
-    for (const Hint& h : t.hints) out += "- " + h.message + " [" + h.code + "]\n";
+    for (const Hint& h : t.hints) out += "- " + said(h.message) + " [" + h.code + "]\n";
   }
   if (t.metrics) out += "\n" + metrics_line(t) + "\n";
-  if (!t.student_note.empty()) out += "\n" + t.student_note + "\n";
+  if (!t.student_note.empty()) out += "\n" + said(t.student_note) + "\n";
   if (!t.log_tail.empty()) {
     // A fence longer than any run of backticks in the output: the output cannot close it
     // and go on as the grader's own Markdown.
@@ -341,7 +355,7 @@ std::string html(const GradeResult& r) {
 std::string markdown(const GradeResult& r) {
   std::string out = "# " + md_cell(r.assignment) + "\n\n**Score: " +
                     fixed(r.error.empty() ? r.score : 0) + " / " + fixed(r.max_score) + "**\n\n";
-  if (!r.error.empty()) out += "Grader error: " + r.error + "\n\n";
+  if (!r.error.empty()) out += "Grader error: " + md_text(r.error) + "\n\n";
   out += "| test | score | status | result |\n|---|---:|---|---|\n";
   for (const TestResult& t : r.tests)
     out += "| " + md_cell(t.name) + " | " + fixed(t.score) + " / " + fixed(t.max_score) + " | " +
