@@ -116,10 +116,21 @@ ApiError failed_job_error(const JobRecord& job) {
   return e;
 }
 
+std::optional<bool> yes_no(std::string_view word) {
+  if (word == "1" || word == "true" || word == "yes") return true;
+  if (word == "0" || word == "false" || word == "no") return false;
+  return std::nullopt;
+}
+
+ApiError not_yes_no(const std::string& name, const std::string& value) {
+  ApiError e = api_error(400, "invalid_option",
+                         name + " must be 1, true, yes, 0, false or no, got '" + value.substr(0, 32) + "'");
+  e.path = name;
+  return e;
+}
+
 bool param_true(const Request& req, const char* name) {
-  if (!req.has_param(name)) return false;
-  std::string v = req.get_param_value(name);
-  return v == "1" || v == "true" || v == "yes";
+  return req.has_param(name) && yes_no(req.get_param_value(name)).value_or(false);
 }
 
 ApiError ambiguous_query(std::string_view target) {
@@ -148,11 +159,8 @@ ApiError ambiguous_query(std::string_view target) {
 bool check_yes_no(const Request& req, Response& res, const char* name) {
   if (!req.has_param(name)) return true;
   const std::string v = req.get_param_value(name);
-  if (v == "1" || v == "true" || v == "yes" || v == "0" || v == "false" || v == "no") return true;
-  ApiError e = api_error(400, "invalid_option", std::string(name) + " must be 1, true, yes, 0, false or no, got '" +
-                                                    v.substr(0, 32) + "'");
-  e.path = name;
-  send_error(res, e);
+  if (yes_no(v)) return true;
+  send_error(res, not_yes_no(name, v));
   return false;
 }
 

@@ -5,6 +5,7 @@
 #include <httplib.h>
 
 #include <initializer_list>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -46,6 +47,10 @@ bool wants_ppm(const httplib::Request& req, const JobRecord& job);
 // The answer for a failed job's result (its image, or a wait=1 render): a render that could
 // not start was refused for what it asked; a crash or a lost job is the server's.
 ApiError failed_job_error(const JobRecord& job);
+// The yes/no words of every option: 1, true, yes; 0, false, no. Anything else: nullopt.
+std::optional<bool> yes_no(std::string_view word);
+// The 400 invalid_option for a yes/no option `name` given `value`, which is not such a word.
+ApiError not_yes_no(const std::string& name, const std::string& value);
 // ?NAME=1, true or yes.
 bool param_true(const httplib::Request& req, const char* name);
 // A query piece with two '=' (`spp=2=3`, or `seed=1;spp=9`: ';' separates nothing): cpp-httplib

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <set>
 
 #include "http_util.h"
 #include "rayfarm/grade.h"
@@ -197,15 +196,9 @@ void post_grade(Service& svc, const Request& req, Response& res) {
     }
   bool hints = true;
   if (auto it = fields.find("hints"); it != fields.end()) {
-    static const std::set<std::string> kOn = {"1", "true", "yes"}, kOff = {"0", "false", "no"};
-    if (!kOn.count(it->second) && !kOff.count(it->second)) {
-      ApiError e = api_error(400, "invalid_option",
-                             "hints must be 1, true, yes, 0, false or no, got '" +
-                                 it->second.substr(0, 32) + "'");
-      e.path = "hints";
-      return send_error(res, e);
-    }
-    hints = kOn.count(it->second) > 0;
+    const std::optional<bool> on = yes_no(it->second);
+    if (!on) return send_error(res, not_yes_no("hints", it->second));
+    hints = *on;
   }
   // One part per name: which of two images would be graded is no one's guess to make.
   for (auto it = req.files.begin(); it != req.files.end(); it = req.files.upper_bound(it->first))
