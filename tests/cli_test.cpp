@@ -67,6 +67,23 @@ bool is_png(const fs::path& file) {
 #define REQUIRE_CLIENT()                                                          \
   if (!fs::exists(kRayfarm)) GTEST_SKIP() << "no " << kRayfarm << " in this build"
 
+// A folder of the test's own under the system's temporary folder, removed with everything in
+// it when the test ends, however it ends.
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name)
+      : path(fs::temp_directory_path() / ("rayfarm-cli-" + name + "-" + std::to_string(getpid()))) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+};
+
 class GradeCli : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -625,8 +642,8 @@ std::string read_file(const fs::path& p) {
 // after the scene and wrote it over the scene.
 TEST(CheckCli, AnOutputThatIsAnInputIsRefused) {
   REQUIRE_CLIENT();
-  const fs::path dir = fs::temp_directory_path() / ("rayfarm-cli-self-" + std::to_string(getpid()));
-  fs::create_directories(dir);
+  const TempDir temp("self");
+  const fs::path& dir = temp.path;
   fs::copy_file(RAYFARM_SOURCE_DIR "/scenes/minimal.txt", dir / "scene.png");
   const std::string before = read_file(dir / "scene.png");
   Outcome r = run("cd " + q(dir.string()) + " && " + kRayfarm + " render scene.png 2>&1");
@@ -639,14 +656,12 @@ TEST(CheckCli, AnOutputThatIsAnInputIsRefused) {
   Outcome c = run(kRayfarm + " compare " + a + " " + a + " --diff " + q((dir / "." / "a.png").string()) + " 2>&1");
   EXPECT_EQ(c.code, 2) << c.out;
   EXPECT_EQ(read_file(dir / "a.png"), image);
-  fs::remove_all(dir);
 }
 
 TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
   REQUIRE_CLIENT();
-  const fs::path dir =
-      fs::temp_directory_path() / ("rayfarm-cli-huge-" + std::to_string(getpid()));
-  fs::create_directories(dir);
+  const TempDir temp("huge");
+  const fs::path& dir = temp.path;
   const fs::path scene = dir / "huge.txt";
   std::ofstream(scene) << "material m { ambient 1 }\n"
                           "camera c { pixeldim 65535 65535 worlddim 8 6 viewpoint 4 3 5 }\n"
@@ -678,15 +693,14 @@ TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
                      q(out.string()) + " 2>&1");
   EXPECT_EQ(told.code, 0) << told.out;
   EXPECT_NE(told.out.find("huge.txt:4:1: warning: "), std::string::npos) << told.out;
-  fs::remove_all(dir);
 }
 
 // Texture paths stay relative to the scene's folder: a scene converted into another folder
 // says that its textures must follow it.
 TEST(ConvertCli, AConvertedSceneElsewhereSaysWhereItsTexturesMustGo) {
   REQUIRE_CLIENT();
-  const fs::path dir = fs::temp_directory_path() / ("rayfarm-cli-conv-" + std::to_string(getpid()));
-  fs::create_directories(dir);
+  const TempDir temp("conv");
+  const fs::path& dir = temp.path;
   const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/textures.txt");
   Outcome away = run(kRayfarm + " convert " + scene + " --to json -o " +
                      q((dir / "t.json").string()) + " 2>&1");
@@ -698,14 +712,13 @@ TEST(ConvertCli, AConvertedSceneElsewhereSaysWhereItsTexturesMustGo) {
                       " --to json -o " + q((dir / "c.json").string()) + " 2>&1");
   EXPECT_EQ(plain.code, 0);
   EXPECT_EQ(plain.out, "") << "no textures, no note";
-  fs::remove_all(dir);
 }
 
 // `-o "$OUT"` with OUT unset is a mistake to say, not a reason to write elsewhere.
 TEST(Cli, AnEmptyFileNameIsRefused) {
   REQUIRE_CLIENT();
-  const fs::path dir = fs::temp_directory_path() / ("rayfarm-cli-empty-" + std::to_string(getpid()));
-  fs::create_directories(dir);
+  const TempDir temp("empty");
+  const fs::path& dir = temp.path;
   const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
   for (const std::string& args : std::vector<std::string>{"render " + scene + " -o ''", "render ''", "convert " + scene + " --to json -o ''",
         "compare a.png b.png --diff ''", "check " + scene + " ''",
@@ -715,7 +728,6 @@ TEST(Cli, AnEmptyFileNameIsRefused) {
     EXPECT_NE(r.out.find("a file name cannot be empty"), std::string::npos) << args << "\n" << r.out;
   }
   EXPECT_TRUE(fs::is_empty(dir)) << "nothing is written under a default name";
-  fs::remove_all(dir);
 }
 
 TEST(ReportCli, TheSppLadderStopsBelowTheReference) {
