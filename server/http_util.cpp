@@ -36,6 +36,23 @@ void send_image(Response& res, const Image& image, bool ppm) {
                   ppm ? "image/x-portable-pixmap" : "image/png");
 }
 
+bool none_match_hits(const Request& req, std::string_view etag) {
+  if (!req.has_header("If-None-Match")) return false;
+  const std::string header = req.get_header_value("If-None-Match");
+  std::string_view rest = header;
+  while (!rest.empty()) {
+    const std::size_t comma = rest.find(',');
+    std::string_view tag = rest.substr(0, comma);
+    rest = comma == std::string_view::npos ? std::string_view{} : rest.substr(comma + 1);
+    while (!tag.empty() && (tag.front() == ' ' || tag.front() == '\t')) tag.remove_prefix(1);
+    while (!tag.empty() && (tag.back() == ' ' || tag.back() == '\t')) tag.remove_suffix(1);
+    if (tag == "*") return true;
+    if (tag.substr(0, 2) == "W/") tag.remove_prefix(2);
+    if (tag == etag) return true;
+  }
+  return false;
+}
+
 bool send_result(Service& service, const Request& req, Response& res, const JobRecord& job) {
   auto png = service.result_png(job);
   if (!png) return false;
@@ -45,7 +62,7 @@ bool send_result(Service& service, const Request& req, Response& res, const JobR
   res.set_header("X-Job-Id", job.id);
   res.set_header("X-Render-Ms", std::to_string(std::llround(job.stats.render_ms)));
   res.set_header("X-Cache", job.cache_hit ? "hit" : "miss");
-  if (req.get_header_value("If-None-Match") == etag) {
+  if (none_match_hits(req, etag)) {
     res.status = 304;
     return true;
   }

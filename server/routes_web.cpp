@@ -27,7 +27,7 @@ void send_web_file(const Request& req, Response& res, const WebFile& file) {
     res.set_header("Content-Security-Policy", kPagePolicy);
     res.set_header("Referrer-Policy", "no-referrer");
   }
-  if (req.get_header_value("If-None-Match") == file.etag) {
+  if (none_match_hits(req, file.etag)) {
     res.status = 304;
     return;
   }

@@ -714,6 +714,15 @@ TEST(ServerJobs, DoneImageIsPngOrPpmAndRevalidates) {
   ASSERT_TRUE(again);
   EXPECT_EQ(again->status, 304);
   EXPECT_TRUE(again->body.empty());
+  // RFC 9110's other forms: a list, a weak tag, any representation; another tag is no match.
+  for (const std::string& header : {"\"other\", " + etag, "W/" + etag, std::string("*")}) {
+    auto listed = c->Get("/jobs/" + id + "/image", {{"If-None-Match", header}});
+    ASSERT_TRUE(listed);
+    EXPECT_EQ(listed->status, 304) << header;
+  }
+  auto other = c->Get("/jobs/" + id + "/image", {{"If-None-Match", "\"other\""}});
+  ASSERT_TRUE(other);
+  EXPECT_EQ(other->status, 200);
 
   auto ppm = c->Get("/jobs/" + id + "/image?format=ppm");
   ASSERT_TRUE(ppm);
