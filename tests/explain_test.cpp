@@ -354,6 +354,41 @@ TEST(Explain, TextShowsEachTermAndTheRoundingAndIsTheSameEveryTime) {
   EXPECT_EQ(json["formula"], e->formula);
 }
 
+// A plain light's E/r that overflows is shown as the value it is, not put down to a slide or
+// a filter it does not have; a projector's slide is named.
+TEST(Explain, AnOverflowingLightIsNoSlide) {
+  const Scene scene = test::scene_from(R"(
+camera { pixeldim 5 5 worlddim 4 4 viewpoint 2 2 5 }
+material grey { diffuse .8 }
+light { location 2 2 -1.9 emissivity 1e308 1 1 }
+sphere { material grey center 2 2 -4 radius 2 }
+)");
+  const auto e = explain_pixel(scene, {}, 2, 2, nullptr);
+  ASSERT_TRUE(e);
+  const std::string text = explanation_text(*e);
+  EXPECT_NE(text.find("E/r = (1e+308, 1, 1)/"), std::string::npos) << text;
+  EXPECT_NE(text.find(" = (inf, "), std::string::npos) << text;
+  EXPECT_EQ(text.find("slide"), std::string::npos) << text;
+  EXPECT_EQ(explanation_json(*e)["samples"][0]["hits"][0]["lights"][0]["slide"], false);
+
+  LoadedScene loaded = load_bundled("scenes/textures.txt");
+  ASSERT_TRUE(loaded.scene);
+  const auto explainer = Explainer::create(*loaded.scene, small(), nullptr);
+  ASSERT_TRUE(explainer);
+  int slid = 0;
+  for (int y = 0; y < 36; y += 3)
+    for (int x = 0; x < 48; x += 3) {
+      const auto p = explainer->explain(x, y, nullptr);
+      ASSERT_TRUE(p);
+      for (const LightTerm& l : p->samples[0].hits[0].lights)
+        if (l.name == "beamer" && l.status == "lit") {
+          EXPECT_TRUE(l.slide);
+          slid += explanation_text(*p).find(" · slide = ") != std::string::npos;
+        }
+    }
+  EXPECT_GT(slid, 0);
+}
+
 // The record as the explanation of sample 0 shows it.
 PixelRecord record_from(const PixelExplanation& e) {
   const std::vector<PathHit>& hits = e.samples[0].hits;

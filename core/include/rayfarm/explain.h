@@ -34,6 +34,7 @@ struct LightTerm {
   double distance = 0;
   double n_dot_l = 0;
   Triple source{};      // the light's own emissivity
+  bool slide = false;   // a projector: its slide may change what reaches the point
   Triple emissivity{};  // as it reaches the point (after distance, slide and filters)
   Triple diffuse{};     // the diffuse term added
   Triple specular{};    // the highlight term added

@@ -211,6 +211,7 @@ PathTrace path_of(const Recorder& rec, const Triple& colour, const Explainer::Ba
       const Light& light = scene.lights[static_cast<std::size_t>(l.light)];
       t.name = light.name;
       t.source = {light.emissivity.x, light.emissivity.y, light.emissivity.z};
+      t.slide = light.kind == LightKind::projector;
       t.status = status_name(l.status);
       t.blocker = file_index(l.blocker);
       if (t.blocker >= 0) {

@@ -22,6 +22,7 @@ json light_json(const LightTerm& l) {
           {"distance", l.distance},
           {"n_dot_l", l.n_dot_l},
           {"source", l.source},
+          {"slide", l.slide},
           {"emissivity", l.emissivity},
           {"diffuse", l.diffuse},
           {"specular", l.specular},
@@ -77,7 +78,9 @@ Triple times(const Triple& a, double s) { return {a[0] * s, a[1] * s, a[2] * s};
 bool nonzero(const Triple& c) { return c[0] != 0 || c[1] != 0 || c[2] != 0; }
 bool near(const Triple& a, const Triple& b) {
   for (int i = 0; i < 3; ++i)
-    if (!(std::abs(a[i] - b[i]) <= 1e-9 * std::max(std::abs(a[i]), std::abs(b[i])))) return false;
+    if (a[i] != b[i] &&  // equal infinities are near; their difference is not a number
+        !(std::abs(a[i] - b[i]) <= 1e-9 * std::max(std::abs(a[i]), std::abs(b[i]))))
+      return false;
   return true;
 }
 
@@ -114,12 +117,12 @@ struct TextWriter {
     line(5, head + ", distance " + num(l.distance) + ", N·L = " + num(l.n_dot_l));
     const std::string glint = cpsc || e.highlight == Highlight::blinn ? "(N·H)" : "(R·V)";
     const std::string power = glint + "^" + num(h.shininess);
-    // What a slide or filters did to the light, where they did anything.
+    // What a slide or filters did to the light, where they did anything. A plain light's value
+    // can differ from the double quotient only by the precision's range (float overflows).
     const Triple plain = cpsc ? l.source : times(l.source, 1 / l.distance);
-    const std::string reaching = near(plain, l.emissivity)
-                                     ? ""
-                                     : (l.status == "filtered" ? " · filters" : " · slide") +
-                                           std::string(" = ") + tri(l.emissivity);
+    const std::string by = l.status == "filtered" ? " · filters" : l.slide ? " · slide" : "";
+    const std::string reaching =
+        near(plain, l.emissivity) ? "" : by + std::string(" = ") + tri(l.emissivity);
     if (cpsc) {
       if (!reaching.empty()) line(7, "E = " + tri(l.source) + reaching);
       line(7, "diffuse: diffuse · E · N·L / d = " + tri(h.diffuse_colour) + " · " +
