@@ -187,6 +187,16 @@ TEST(Assignment, WholeNumberOptionsAreReadAsWritten) {
   EXPECT_EQ(text["seed"], "18446744073709551615");
   EXPECT_EQ(text["width"], "40000");
   EXPECT_EQ(text["max_dist"], "12.5");
+
+  // A whole number in float form is the same number.
+  Assignment f = parse_ok(R"({"name": "x", "options": {"spp": 1e5, "width": 640.0},
+      "tests": [{"name": "a", "scene": "a.txt", "options": {"max_dist": 1.5e1}}]})");
+  ASSERT_EQ(f.tests.size(), 1u);
+  text.clear();
+  for (const auto& o : f.tests[0].options) text[o.name] = o.value;
+  EXPECT_EQ(text["spp"], "100000");
+  EXPECT_EQ(text["width"], "640");
+  EXPECT_EQ(text["max_dist"], "15");
 }
 
 TEST(Assignment, ErrorsArePlacedByTheirJsonPath) {

@@ -1,6 +1,8 @@
 // The JSON reader shared by scenes and assignments (json_tree.h).
 #include "format/json_tree.h"
 
+#include <cmath>
+#include <cstdint>
 #include <deque>
 #include <set>
 #include <vector>
@@ -158,7 +160,12 @@ std::string json_pointer_token(std::string_view key) {
 std::string json_number_text(const Json& number) {
   if (number.is_number_unsigned()) return std::to_string(number.get<std::uint64_t>());
   if (number.is_number_integer()) return std::to_string(number.get<std::int64_t>());
-  return format_number(number.get<double>());
+  // A whole number written in float form (1e5, 100.0) is the integer it equals, so a
+  // whole-number option takes it; the shortest form would be "1e+05".
+  const double v = number.get<double>();
+  if (std::abs(v) <= 0x1p53 && v == std::floor(v))
+    return std::to_string(static_cast<std::int64_t>(v));
+  return format_number(v);
 }
 
 std::optional<Json> parse_json_tree(std::string_view text, Diagnostics& diags) {

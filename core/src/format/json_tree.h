@@ -15,8 +15,9 @@ namespace rayfarm {
 // A key as a JSON Pointer token (RFC 6901: ~ as ~0, / as ~1).
 std::string json_pointer_token(std::string_view key);
 
-// A JSON number as an option's text: whole numbers as written (100000, not 1e+05; an unsigned
-// 64-bit seed exactly), others as format_number writes them.
+// A JSON number as an option's text: whole numbers as integers (100000, not 1e+05, for 100000,
+// 1e5 or 100000.0 alike; an unsigned 64-bit seed exactly), others as format_number writes
+// them.
 std::string json_number_text(const nlohmann::ordered_json& number);
 
 // The document, or nothing after an error: invalid JSON ("json-syntax", at its line and
