@@ -547,6 +547,22 @@ TEST(Lint, AnImageTooLargeToRenderIsAnErrorAtItsCamera) {
   sampled.spp = 4;
   ASSERT_EQ(codes(errors_of(big, sampled)), std::vector<std::string>{"image-too-large"});
   EXPECT_TRUE(contains(errors_of(big, sampled)[0].message, "with spp > 1"));
+
+  // A JSON scene's render block that asks for the size is where the error points.
+  const std::string json = R"({"camera": {"pixeldim": [40, 30], "worlddim": [8, 6],
+      "viewpoint": [4, 3, 5]}, "materials": {"m": {"ambient": 1}},
+      "objects": [{"type": "sphere", "material": "m", "center": [4, 3, -5], "radius": 1}],
+      "render": {"width": 65535, "height": 60000}})";
+  LoadedScene loaded = load_scene(json);
+  ASSERT_TRUE(loaded.scene.has_value()) << dump(loaded.diags);
+  RenderOptions asked;
+  apply_options(asked, loaded.scene->render, loaded.diags);
+  const auto from_block = errors_of(json, asked);
+  ASSERT_EQ(codes(from_block), std::vector<std::string>{"image-too-large"});
+  EXPECT_EQ(from_block[0].where.path, "/render/width");
+  // Overridden on the command line, the block's width no longer gives it; its height does.
+  asked.width = 65000;
+  EXPECT_EQ(errors_of(json, asked)[0].where.path, "/render/height");
 }
 
 }  // namespace

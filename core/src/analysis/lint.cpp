@@ -3,6 +3,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "rayfarm/options.h"
 #include "rayfarm/render.h"
 
 namespace rayfarm {
@@ -18,9 +19,28 @@ bool is_black(const glm::dvec3& c) { return c.x <= 0 && c.y <= 0 && c.z <= 0; }
 
 namespace {
 
+// Where the scene's own render options ask for the size `options` has: the last width, height
+// or spp of its render block that gives the value in effect (a command line may have
+// overridden it). Nowhere when none does.
+Where render_block_place(const Scene& scene, const RenderOptions& options) {
+  for (const char* name : {"width", "height", "spp"})
+    for (auto it = scene.render.rbegin(); it != scene.render.rend(); ++it) {
+      if (it->name != name) continue;
+      RenderOptions probe;
+      if (apply_option(probe, it->name, it->value)) break;
+      const bool gives = it->name == "width"    ? probe.width == options.width
+                         : it->name == "height" ? probe.height == options.height
+                                                : probe.spp == options.spp;
+      if (gives) return it->where;
+      break;  // an earlier one of the name was overridden
+    }
+  return {};
+}
+
 // An error, not a warning: render refuses it. Its place is the camera's when the size is the
-// camera's own.
-void lint_size(const Camera& cam, const RenderOptions& options, Diagnostics& diags) {
+// camera's own, the render block's entry when the scene asks for it there.
+void lint_size(const Scene& scene, const Camera& cam, const RenderOptions& options,
+               Diagnostics& diags) {
   const bool sized_here = options.width <= 0 && options.height <= 0;
   if (std::string size = image_size_error(options.width > 0 ? options.width : cam.width,
                                           options.height > 0 ? options.height : cam.height,
@@ -30,14 +50,14 @@ void lint_size(const Camera& cam, const RenderOptions& options, Diagnostics& dia
                 sized_here ? (cam.name.empty() ? "" : label("camera", cam.name) + ": ") + size +
                                  "; --width and --height render the same view smaller"
                            : "with the width and height asked for, " + size,
-                sized_here ? cam.where : Where{});
+                sized_here ? cam.where : render_block_place(scene, options));
 }
 
 }  // namespace
 
 void lint_image_size(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
   if (auto cam_index = scene.find_camera(options.camera))
-    lint_size(scene.cameras[*cam_index], options, diags);
+    lint_size(scene, scene.cameras[*cam_index], options, diags);
 }
 
 void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
@@ -47,7 +67,7 @@ void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& d
     return;
   }
   const Camera& cam = scene.cameras[*cam_index];
-  lint_size(cam, options, diags);
+  lint_size(scene, cam, options, diags);
   glm::dvec3 eye = cam.viewpoint;
   glm::dvec3 centre{cam.world_width / 2, cam.world_height / 2, 0};
   glm::dvec3 view = centre - eye;
