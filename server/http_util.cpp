@@ -37,8 +37,12 @@ void send_image(Response& res, const Image& image, bool ppm) {
 }
 
 bool none_match_hits(const Request& req, std::string_view etag) {
-  if (!req.has_header("If-None-Match")) return false;
-  const std::string header = req.get_header_value("If-None-Match");
+  // Outside GET and HEAD a met condition is a 412 (RFC 9110 §13.1.2), never a 304: a POST
+  // that waits for its image ignores it.
+  if (req.method != "GET" && req.method != "HEAD") return false;
+  std::string header;  // repeated header lines are one list (§5.3)
+  for (std::size_t i = 0; i < req.get_header_value_count("If-None-Match"); ++i)
+    header += (i ? "," : "") + req.get_header_value("If-None-Match", i);
   std::string_view rest = header;
   while (!rest.empty()) {
     const std::size_t comma = rest.find(',');

@@ -26,8 +26,8 @@ void send_error(httplib::Response& res, const ApiError& e);
 void send_error(httplib::Response& res, int status, const std::string& code,
                 const std::string& message);
 void send_image(httplib::Response& res, const Image& image, bool ppm);
-// Whether a request's If-None-Match names `etag` (RFC 9110 §13.1.2): a list of tags, weak or
-// strong (compared weakly), or "*" for any current representation.
+// Whether a GET or HEAD request's If-None-Match names `etag` (RFC 9110 §13.1.2): a list of
+// tags, weak or strong (compared weakly), or "*" for any current representation.
 bool none_match_hits(const httplib::Request& req, std::string_view etag);
 // Sends a finished job's result with its caching headers; false when it has expired.
 bool send_result(Service& service, const httplib::Request& req, httplib::Response& res,

@@ -38,7 +38,8 @@ std::string Metrics::render_text(const Gauges& g) const {
     o << "rayfarm_jobs{state=\"" << s << "\"} " << (it == g.jobs_by_state.end() ? 0 : it->second)
       << "\n";
   }
-  o << "# HELP rayfarm_jobs_finished_total Jobs that ended, by final state.\n"
+  o << "# HELP rayfarm_jobs_finished_total Queued jobs that ended, by final state (one answered "
+       "from the cache is never queued: rayfarm_cache_hits_total).\n"
        "# TYPE rayfarm_jobs_finished_total counter\n";
   for (const char* s : {"done", "failed", "canceled"}) {
     auto it = finished_.find(s);

@@ -563,6 +563,17 @@ TEST(Lint, AnImageTooLargeToRenderIsAnErrorAtItsCamera) {
   // Overridden on the command line, the block's width no longer gives it; its height does.
   asked.width = 65000;
   EXPECT_EQ(errors_of(json, asked)[0].where.path, "/render/height");
+  // A block that asks for nothing larger than the default is not the cause.
+  std::string plain = json;
+  plain.replace(plain.find("\"width\": 65535, \"height\": 60000"), 31, "\"spp\": 1");
+  LoadedScene one = load_scene(plain);
+  ASSERT_TRUE(one.scene.has_value()) << dump(one.diags) << plain;
+  RenderOptions wide;
+  apply_options(wide, one.scene->render, one.diags);
+  wide.width = wide.height = 65535;
+  const auto from_command = errors_of(plain, wide);
+  ASSERT_EQ(codes(from_command), std::vector<std::string>{"image-too-large"});
+  EXPECT_EQ(from_command[0].where, Where{});
 }
 
 }  // namespace

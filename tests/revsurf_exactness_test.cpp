@@ -251,7 +251,7 @@ Tally compare(int surfer, long n, double trust, std::uint64_t seed) {
 
 long rays_per_surface() {
   const char* env = std::getenv("RAYFARM_REVSURF_RAYS");
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#ifdef RAYFARM_SANITIZED
   constexpr long kRays = 200'000;  // sanitizers are ten times slower; Release tests 2 M
 #else
   constexpr long kRays = 2'000'000;

@@ -548,6 +548,12 @@ TEST(ServerRender, WaitAnswersTheCliBytesWithHeaders) {
   EXPECT_EQ(r->get_header_value("X-Cache"), "miss");
   EXPECT_FALSE(r->get_header_value("ETag").empty());
   EXPECT_EQ(r->body, local_render(kScene, {{"spp", "4"}, {"seed", "7"}, {"highlight", "blinn"}}));
+  // A POST is never answered 304, whatever its If-None-Match: its image is what it waited for.
+  auto again = c->Post("/render?wait=1&spp=4&seed=7&highlight=blinn",
+                       {{"If-None-Match", r->get_header_value("ETag")}}, kScene, "text/plain");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->status, 200);
+  EXPECT_EQ(again->body, r->body);
 
   auto ppm = c->Post("/render?wait=1&format=ppm", kScene, "text/plain");
   ASSERT_TRUE(ppm);
@@ -723,6 +729,11 @@ TEST(ServerJobs, DoneImageIsPngOrPpmAndRevalidates) {
   auto other = c->Get("/jobs/" + id + "/image", {{"If-None-Match", "\"other\""}});
   ASSERT_TRUE(other);
   EXPECT_EQ(other->status, 200);
+  // Repeated header lines are one list.
+  auto lines = c->Get("/jobs/" + id + "/image",
+                      {{"If-None-Match", "\"other\""}, {"If-None-Match", etag}});
+  ASSERT_TRUE(lines);
+  EXPECT_EQ(lines->status, 304);
 
   auto ppm = c->Get("/jobs/" + id + "/image?format=ppm");
   ASSERT_TRUE(ppm);

@@ -145,7 +145,7 @@ TEST_F(FarmNodes, ACancelFromAnyConnectionStopsEveryNodeAtOnce) {
     std::this_thread::sleep_for(1ms);
   const auto stopped_after = std::chrono::steady_clock::now() - t0;
   EXPECT_EQ(a->in_flight() + b->in_flight(), 0u);
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#ifdef RAYFARM_SANITIZED
   // Renders are 5-15x slower there, and their mid-tile checks as far apart; still far below
   // the 3 s heartbeat, the only other way these units would stop this soon.
   constexpr auto kBound = 1500ms;

@@ -19,20 +19,25 @@ bool is_black(const glm::dvec3& c) { return c.x <= 0 && c.y <= 0 && c.z <= 0; }
 
 namespace {
 
-// Where the scene's own render options ask for the size `options` has: the last width, height
-// or spp of its render block that gives the value in effect (a command line may have
-// overridden it). Nowhere when none does.
+// Where the scene's own render options ask for the size `options` has: the width, height or
+// spp of its render block that is in effect (the last valid one of its name, as
+// apply_options reads them) and gives the value used, unless that value is the default (a
+// command line may have overridden it). Nowhere when none does.
 Where render_block_place(const Scene& scene, const RenderOptions& options) {
   for (const char* name : {"width", "height", "spp"})
     for (auto it = scene.render.rbegin(); it != scene.render.rend(); ++it) {
       if (it->name != name) continue;
       RenderOptions probe;
-      if (apply_option(probe, it->name, it->value)) break;
-      const bool gives = it->name == "width"    ? probe.width == options.width
-                         : it->name == "height" ? probe.height == options.height
-                                                : probe.spp == options.spp;
+      if (apply_option(probe, it->name, it->value)) continue;  // refused: an earlier one holds
+      bool gives;
+      if (it->name == "width")
+        gives = options.width > 0 && probe.width == options.width;
+      else if (it->name == "height")
+        gives = options.height > 0 && probe.height == options.height;
+      else
+        gives = options.spp > 1 && probe.spp == options.spp;
       if (gives) return it->where;
-      break;  // an earlier one of the name was overridden
+      break;
     }
   return {};
 }

@@ -77,10 +77,14 @@ Triple times(const Triple& a, const Triple& b) { return {a[0] * b[0], a[1] * b[1
 Triple times(const Triple& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
 bool nonzero(const Triple& c) { return c[0] != 0 || c[1] != 0 || c[2] != 0; }
 bool near(const Triple& a, const Triple& b) {
-  for (int i = 0; i < 3; ++i)
-    if (a[i] != b[i] &&  // equal infinities are near; their difference is not a number
+  for (int i = 0; i < 3; ++i) {
+    // Equal infinities are near (their difference is not a number); an infinity is near
+    // nothing else (any finite difference is within 1e-9 of it).
+    if (a[i] == b[i]) continue;
+    if (std::isinf(a[i]) || std::isinf(b[i]) ||
         !(std::abs(a[i] - b[i]) <= 1e-9 * std::max(std::abs(a[i]), std::abs(b[i]))))
       return false;
+  }
   return true;
 }
 
@@ -118,7 +122,7 @@ struct TextWriter {
     const std::string glint = cpsc || e.highlight == Highlight::blinn ? "(N·H)" : "(R·V)";
     const std::string power = glint + "^" + num(h.shininess);
     // What a slide or filters did to the light, where they did anything. A plain light's value
-    // can differ from the double quotient only by the precision's range (float overflows).
+    // differs from the quotient in double only by float's rounding or range: shown unlabelled.
     const Triple plain = cpsc ? l.source : times(l.source, 1 / l.distance);
     const std::string by = l.status == "filtered" ? " · filters" : l.slide ? " · slide" : "";
     const std::string reaching =
