@@ -25,6 +25,7 @@
 
 #include "http.h"
 #include "hostile_server.h"
+#include "temp_dir.h"
 
 namespace {
 
@@ -67,22 +68,7 @@ bool is_png(const fs::path& file) {
 #define REQUIRE_CLIENT()                                                          \
   if (!fs::exists(kRayfarm)) GTEST_SKIP() << "no " << kRayfarm << " in this build"
 
-// A folder of the test's own under the system's temporary folder, removed with everything in
-// it when the test ends, however it ends.
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() / ("rayfarm-cli-" + name + "-" + std::to_string(getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-};
+using rayfarm::test::TempDir;
 
 class GradeCli : public ::testing::Test {
  protected:
@@ -642,7 +628,7 @@ std::string read_file(const fs::path& p) {
 // after the scene and wrote it over the scene.
 TEST(CheckCli, AnOutputThatIsAnInputIsRefused) {
   REQUIRE_CLIENT();
-  const TempDir temp("self");
+  const TempDir temp("cli-self");
   const fs::path& dir = temp.path;
   fs::copy_file(RAYFARM_SOURCE_DIR "/scenes/minimal.txt", dir / "scene.png");
   const std::string before = read_file(dir / "scene.png");
@@ -660,7 +646,7 @@ TEST(CheckCli, AnOutputThatIsAnInputIsRefused) {
 
 TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
   REQUIRE_CLIENT();
-  const TempDir temp("huge");
+  const TempDir temp("cli-huge");
   const fs::path& dir = temp.path;
   const fs::path scene = dir / "huge.txt";
   std::ofstream(scene) << "material m { ambient 1 }\n"
@@ -699,7 +685,7 @@ TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
 // says that its textures must follow it.
 TEST(ConvertCli, AConvertedSceneElsewhereSaysWhereItsTexturesMustGo) {
   REQUIRE_CLIENT();
-  const TempDir temp("conv");
+  const TempDir temp("cli-conv");
   const fs::path& dir = temp.path;
   const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/textures.txt");
   Outcome away = run(kRayfarm + " convert " + scene + " --to json -o " +
@@ -717,7 +703,7 @@ TEST(ConvertCli, AConvertedSceneElsewhereSaysWhereItsTexturesMustGo) {
 // `-o "$OUT"` with OUT unset is a mistake to say, not a reason to write elsewhere.
 TEST(Cli, AnEmptyFileNameIsRefused) {
   REQUIRE_CLIENT();
-  const TempDir temp("empty");
+  const TempDir temp("cli-empty");
   const fs::path& dir = temp.path;
   const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt");
   for (const std::string& args : std::vector<std::string>{"render " + scene + " -o ''", "render ''", "convert " + scene + " --to json -o ''",

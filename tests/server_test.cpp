@@ -38,6 +38,7 @@
 #include "rayfarm/render.h"
 #include "rayfarm/sha256.h"
 #include "service.h"
+#include "temp_dir.h"
 
 namespace rayfarm::server {
 namespace {
@@ -1074,18 +1075,7 @@ TEST(ServerProfiles, DefaultProfileIsAFlagAndAnEnvironmentVariable) {
 
 // ---- Restarts ----------------------------------------------------------------------------
 
-struct TempDir {
-  std::filesystem::path path;
-  TempDir() {
-    std::string tmpl = (std::filesystem::temp_directory_path() / "rayfarm-test-XXXXXX").string();
-    if (!::mkdtemp(tmpl.data())) throw std::runtime_error("mkdtemp");
-    path = tmpl;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path, ec);
-  }
-};
+using test::TempDir;
 
 TEST(ServerRestart, FinishedImagesAreServedAfterARestart) {
   TempDir dir;
