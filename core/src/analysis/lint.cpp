@@ -24,19 +24,21 @@ namespace {
 // apply_options reads them) and gives the value used, unless that value is the default (a
 // command line may have overridden it). Nowhere when none does.
 Where render_block_place(const Scene& scene, const RenderOptions& options) {
-  for (const char* name : {"width", "height", "spp"})
+  struct Size {
+    const char* name;
+    int RenderOptions::*field;
+  };
+  static constexpr Size kSizes[] = {{"width", &RenderOptions::width},
+                                     {"height", &RenderOptions::height},
+                                     {"spp", &RenderOptions::spp}};
+  const RenderOptions defaults;
+  for (const Size& size : kSizes)
     for (auto it = scene.render.rbegin(); it != scene.render.rend(); ++it) {
-      if (it->name != name) continue;
+      if (it->name != size.name) continue;
       RenderOptions probe;
       if (apply_option(probe, it->name, it->value)) continue;  // refused: an earlier one holds
-      bool gives;
-      if (it->name == "width")
-        gives = options.width > 0 && probe.width == options.width;
-      else if (it->name == "height")
-        gives = options.height > 0 && probe.height == options.height;
-      else
-        gives = options.spp > 1 && probe.spp == options.spp;
-      if (gives) return it->where;
+      const int used = options.*size.field;
+      if (used > defaults.*size.field && probe.*size.field == used) return it->where;
       break;
     }
   return {};
