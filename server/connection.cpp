@@ -7,9 +7,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <string>
+#include <string_view>
 
 namespace rayfarm::server {
 namespace {
@@ -19,11 +22,45 @@ using Clock = std::chrono::steady_clock;
 struct ConnectionState {
   bool head_complete = false;
   bool close_after = false;
-  std::size_t head_bytes = 0;
+  bool body_failed = false;  // a read of the body timed out, failed or met the end
+  std::string head;          // the request line and headers as they arrived
   Clock::time_point head_deadline{};
   Clock::time_point body_start{};  // when the head was complete
   std::size_t body_bytes = 0;      // read since
 };
+
+bool same_name(std::string_view a, std::string_view b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+           return std::tolower(static_cast<unsigned char>(x)) ==
+                  std::tolower(static_cast<unsigned char>(y));
+         });
+}
+
+// The value of the head's Content-Length line; 0 when there is none or it is not one number
+// (such a request is refused before its body is read, and its connection closed).
+std::size_t declared_length(std::string_view head) {
+  std::size_t length = 0;
+  for (std::size_t at = head.find('\n'); at != std::string_view::npos;) {
+    const std::size_t end = head.find('\n', at + 1);
+    std::string_view line = head.substr(at + 1, end == std::string_view::npos ? end : end - at - 1);
+    at = end;
+    const std::size_t colon = line.find(':');
+    if (colon == std::string_view::npos || !same_name(line.substr(0, colon), "Content-Length"))
+      continue;
+    std::size_t value = 0;
+    bool digits = false;
+    for (char c : line.substr(colon + 1)) {
+      if (c >= '0' && c <= '9' && value < (std::size_t{1} << 60)) {
+        value = value * 10 + static_cast<std::size_t>(c - '0');
+        digits = true;
+      } else if (c != ' ' && c != '\t' && c != '\r') {
+        return 0;
+      }
+    }
+    if (digits) length = value;
+  }
+  return length;
+}
 
 thread_local ConnectionState* current = nullptr;
 
@@ -86,7 +123,7 @@ class SocketStream final : public httplib::Stream {
     if (!buffered()) {
       int timeout = read_timeout_ms_;
       if (!state_.head_complete) {
-        if (state_.head_bytes >= limits_.max_head_bytes) return -1;
+        if (state_.head.size() >= limits_.max_head_bytes) return -1;
         timeout = std::min(timeout, ms_until(state_.head_deadline));
         if (timeout == 0) return -1;
       } else {
@@ -95,20 +132,23 @@ class SocketStream final : public httplib::Stream {
             static_cast<long long>(1000.0 * static_cast<double>(state_.body_bytes) /
                                    static_cast<double>(std::max<std::size_t>(1, limits_.min_body_rate))));
         timeout = std::min(timeout, ms_until(state_.body_start + limits_.head_timeout + earned));
-        if (timeout == 0) return -1;
       }
-      if (poll_for(fd_, POLLIN, timeout) <= 0) return -1;
-      ssize_t n;
-      do n = ::recv(fd_, buf_, sizeof buf_, 0);
-      while (n < 0 && errno == EINTR);
-      if (n <= 0) return n;
+      ssize_t n = -1;
+      if (timeout > 0 && poll_for(fd_, POLLIN, timeout) > 0) {
+        do n = ::recv(fd_, buf_, sizeof buf_, 0);
+        while (n < 0 && errno == EINTR);
+      }
+      if (n <= 0) {
+        if (state_.head_complete) state_.body_failed = true;
+        return n;
+      }
       pos_ = 0;
       len_ = static_cast<size_t>(n);
     }
     size_t n = std::min(size, len_ - pos_);
     std::memcpy(ptr, buf_ + pos_, n);
     pos_ += n;
-    if (!state_.head_complete) state_.head_bytes += n;
+    if (!state_.head_complete) state_.head.append(ptr, n);
     else state_.body_bytes += n;
     return static_cast<ssize_t>(n);
   }
@@ -162,6 +202,25 @@ void GuardedServer::head_complete() {
   }
 }
 
+bool GuardedServer::head_read() { return current && current->head_complete; }
+
+bool GuardedServer::empty_header(std::string_view name) {
+  if (!current) return false;
+  std::string_view head = current->head;
+  for (std::size_t at = head.find('\n'); at != std::string_view::npos;) {
+    const std::size_t end = head.find('\n', at + 1);
+    std::string_view line = head.substr(at + 1, end == std::string_view::npos ? end : end - at - 1);
+    at = end;
+    const std::size_t colon = line.find(':');
+    if (colon != std::string_view::npos && same_name(line.substr(0, colon), name) &&
+        line.find_first_not_of(" \t\r", colon + 1) == std::string_view::npos)
+      return true;
+  }
+  return false;
+}
+
+bool GuardedServer::body_cut_short() { return current && current->body_failed; }
+
 void GuardedServer::close_after(httplib::Response& res) {
   if (current) current->close_after = true;
   res.set_header("Connection", "close");
@@ -194,8 +253,14 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
     bool connection_closed = false;
     ret = process_request(strm, left == 1, connection_closed, nullptr);
     // A head the library refused itself (bad request line, headers, range) never reached
-    // the handlers; whatever follows it is not trusted either.
+    // the handlers; whatever follows it is not trusted either. Nor is what follows a body
+    // not read to its end (cut short, or refused part way: a multipart body that does not
+    // parse): its rest would be read as the next request.
     if (!ret || connection_closed || state.close_after || !state.head_complete) break;
+    if (state.body_failed || state.body_bytes < declared_length(state.head)) {
+      state.close_after = true;
+      break;
+    }
   }
   current = nullptr;
   if (state.close_after) lingering_close(sock);

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstddef>
+#include <string_view>
 
 namespace rayfarm::server {
 
@@ -34,6 +35,17 @@ class GuardedServer : public httplib::Server {
   // and expect-100 handlers: a request that never reaches them (one the library refused
   // itself) ends its connection.
   static void head_complete();
+  // Whether head_complete() was called for the request being answered: false where the
+  // library refused the request line or a header itself (a malformed line, or one over its
+  // 8 KiB).
+  static bool head_read();
+  // Whether the request being answered has a header line `name` (any case) with an empty
+  // value, which the library drops: read from the head as it arrived.
+  static bool empty_header(std::string_view name);
+  // Whether the body of the request being answered stopped before its Content-Length: it
+  // fell behind min_body_rate, or the client stopped sending. The connection ends after the
+  // answer, as after any request whose body was not read to its end.
+  static bool body_cut_short();
   // This answer is sent without reading the request's body: the connection ends after it.
   static void close_after(httplib::Response& res);
 

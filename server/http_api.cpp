@@ -197,12 +197,36 @@ void HttpApi::harden() {
           res.status = 501;
           break;
         }
-        send_error(res, 400, "http_error", "the request could not be served");
+        // The library's own refusals, said as what they are; the connection ends after each.
+        if (GuardedServer::body_cut_short()) {
+          GuardedServer::close_after(res);
+          send_error(res, 408, "request_timeout",
+                     "the request body stopped before its Content-Length: it arrived slower "
+                     "than 8 KiB a second, or the client stopped sending it");
+          res.status = 408;
+        } else if (!GuardedServer::head_read()) {
+          send_error(res, 400, "http_error",
+                     "the request line or a header could not be read: a malformed line, or "
+                     "one longer than 8 KiB");
+        } else if (req.is_multipart_form_data()) {
+          GuardedServer::close_after(res);
+          send_error(res, 400, "bad_multipart",
+                     "the multipart/form-data body could not be read: each part starts with "
+                     "--BOUNDARY (the boundary of its Content-Type) and has a "
+                     "Content-Disposition with a name, and the body ends with --BOUNDARY--");
+        } else {
+          send_error(res, 400, "http_error", "the request body could not be read");
+        }
         break;
       case 405: send_error(res, 405, "method_not_allowed", "method not allowed"); break;
       case 413: send_error(res, 413, "body_too_large", "the request body is too large"); break;
       case 414: send_error(res, 414, "uri_too_long", "the request line is too long"); break;
-      case 416: send_error(res, 416, "range_not_satisfiable", "the range is not satisfiable"); break;
+      case 416:
+        // Only the library answers this here: a Range header that is not a byte range.
+        send_error(res, 416, "range_not_satisfiable",
+                   "the Range header is not a byte range (bytes=FIRST-LAST); ranges are not "
+                   "offered: send the request without one for the whole resource");
+        break;
       default: send_error(res, res.status, "http_error", "the request could not be served");
     }
     return httplib::Server::HandlerResponse::Handled;

@@ -201,11 +201,13 @@ std::string bearer_token(const Request& req) {
   // §11.1).
   if (req.get_header_value_count("Authorization") != 1) return {};
   std::string auth = req.get_header_value("Authorization");
+  // The scheme, then one or more spaces (RFC 9110 §11.4: 1*SP) before the token.
   const std::string prefix = "bearer ";
   if (auth.size() <= prefix.size()) return {};
   for (std::size_t i = 0; i < prefix.size(); ++i)
     if (std::tolower(static_cast<unsigned char>(auth[i])) != prefix[i]) return {};
-  return auth.substr(prefix.size());
+  const std::size_t token = auth.find_first_not_of(' ', prefix.size());
+  return token == std::string::npos ? std::string() : auth.substr(token);
 }
 
 std::string client_of(const Request& req) {

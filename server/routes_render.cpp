@@ -4,6 +4,7 @@
 #include <fstream>
 #include <set>
 
+#include "connection.h"
 #include "http_util.h"
 #include "routes.h"
 
@@ -19,7 +20,14 @@ const std::set<std::string> kControlParams = {"wait", "sample"};
 // An Idempotency-Key as Stripe takes them: 1 to 255 visible ASCII characters (a UUID is the
 // usual choice).
 ApiError check_idempotency_key(const Request& req, std::string& key) {
-  if (!req.has_header("Idempotency-Key")) return {};
+  if (!req.has_header("Idempotency-Key")) {
+    // The library drops a header line with an empty value: read from the head as it came.
+    if (GuardedServer::empty_header("Idempotency-Key"))
+      return api_error(400, "invalid_idempotency_key",
+                       "Idempotency-Key is empty: give 1 to 255 visible ASCII characters (a "
+                       "UUID, say), or leave the header out");
+    return {};
+  }
   if (req.get_header_value_count("Idempotency-Key") > 1)
     return api_error(400, "invalid_idempotency_key", "Idempotency-Key is given more than once");
   key = req.get_header_value("Idempotency-Key");

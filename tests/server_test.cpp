@@ -2191,6 +2191,9 @@ TEST(ServerAuth, ConfiguredTokensAreRequired) {
   // The scheme in any case; two headers are no token at all.
   EXPECT_EQ(code_of(none->Get("/jobs", {{"Authorization", "bearer s3cret"}})), 200);
   EXPECT_EQ(code_of(none->Get("/jobs", {{"Authorization", "BEARER s3cret"}})), 200);
+  // One or more spaces after it (RFC 9110 §11.4), and none is no token.
+  EXPECT_EQ(code_of(none->Get("/jobs", {{"Authorization", "Bearer   s3cret"}})), 200);
+  EXPECT_EQ(code_of(none->Get("/jobs", {{"Authorization", "Bearer    "}})), 401);
   EXPECT_EQ(code_of(none->Get("/jobs", {{"Authorization", "Bearer s3cret"},
                                          {"Authorization", "Bearer other"}})),
             401);
@@ -2777,6 +2780,78 @@ TEST(ServerHardening, TricklingBodyIsCutOffAtTheMinimumRate) {
   EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
 }
 
+// A body cut off for falling behind, or stalled, ends its connection after a 408: what the
+// client sends after it (here, requests) is never read as further requests.
+TEST(ServerHardening, WhatFollowsABodyCutOffIsNeverARequest) {
+  Settings s = test_settings();
+  s.header_timeout = 1;
+  s.access_log = false;
+  TestServer server(s);
+  const std::string inner = "DELETE /jobs/00000000000000000000000000000000 HTTP/1.1\r\nHost: x\r\n\r\n";
+  for (const bool trickle : {true, false}) {
+    RawConnection conn(server.port());
+    ASSERT_TRUE(conn.send("POST /check HTTP/1.1\r\nHost: x\r\nContent-Type: text/plain\r\n"
+                          "Content-Length: 1000000\r\n\r\ncamera\n"));
+    const auto start = Clock::now();
+    if (trickle) {
+      // Whole requests as the body, each well within the read timeout, far under 8 KiB/s.
+      while (Clock::now() - start < 2500ms && conn.send(inner)) std::this_thread::sleep_for(150ms);
+    } else {
+      std::this_thread::sleep_for(1500ms);  // past the grace, with 7 bytes of 1,000,000
+      conn.send(inner + "GET /healthz HTTP/1.1\r\nHost: x\r\n\r\n");
+    }
+    auto r = conn.read_response();
+    ASSERT_TRUE(r) << trickle;
+    EXPECT_EQ(r->status, 408) << trickle;
+    EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["code"], "request_timeout") << r->body;
+    EXPECT_EQ(r->header("connection"), "close");
+    std::string extra;
+    EXPECT_TRUE(conn.closed_by_peer(3s, &extra)) << trickle;
+    EXPECT_EQ(extra.find("HTTP/1.1"), std::string::npos) << trickle << extra.substr(0, 300);
+  }
+  const std::string metrics = server.client()->Get("/metrics")->body;
+  EXPECT_EQ(metrics.find("DELETE"), std::string::npos) << "no request was read from a body";
+}
+
+// A multipart body the library cannot parse is refused part way through: its connection
+// ends, so the rest of it is never a request, and the error says what a body needs.
+TEST(ServerHardening, AMultipartBodyThatDoesNotParseEndsItsConnection) {
+  TestServer server;
+  const std::string smuggled = "GET /nonexistent-smuggled HTTP/1.1\r\nHost: x\r\n\r\n";
+  const std::string body = "--other\r\nContent-Disposition: form-data; name=\"scene\"\r\n\r\n" +
+                           std::string(kScene) + "\r\n--other--\r\n" + smuggled;
+  RawConnection conn(server.port());
+  ASSERT_TRUE(conn.send(scene_post("Content-Type: multipart/form-data; boundary=b\r\n", body)));
+  auto r = conn.read_response();
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 400);
+  const Json error = Json::parse(r->body, nullptr, false)["error"];
+  EXPECT_EQ(error["code"], "bad_multipart") << r->body;
+  EXPECT_NE(error["message"].get<std::string>().find("--BOUNDARY--"), std::string::npos);
+  std::string extra;
+  EXPECT_TRUE(conn.closed_by_peer(3s, &extra));
+  EXPECT_EQ(extra.find("HTTP/1.1"), std::string::npos) << extra.substr(0, 300);
+}
+
+// What the library refuses in a request's head is said as what it is.
+TEST(ServerHardening, TheLibrarysRefusalsSayWhatWasWrong) {
+  TestServer server;
+  auto c = server.client();
+  for (const std::string range : {"bytes=abc", "items=0-1", "bytes=9-3"}) {
+    auto r = c->Get("/healthz", {{"Range", range}});
+    ASSERT_TRUE(r) << range;
+    EXPECT_EQ(r->status, 416) << range;
+    EXPECT_NE(error_of(r)["message"].get<std::string>().find("not a byte range"),
+              std::string::npos)
+        << range << r->body;
+  }
+  auto long_line = c->Get("/healthz", {{"Cookie", std::string(9000, 'a')}});
+  ASSERT_TRUE(long_line);
+  EXPECT_EQ(long_line->status, 400);
+  EXPECT_NE(error_of(long_line)["message"].get<std::string>().find("8 KiB"), std::string::npos)
+      << long_line->body;
+}
+
 TEST(ServerHardening, CurlStyleFormUploadOver8KiBWorks) {
   TestServer server;
   // curl --data-binary @scene.txt labels the body a urlencoded form.
@@ -3244,6 +3319,17 @@ TEST(ServerIdempotency, AKeyWithAnotherRequestIs422AndBadKeysAre400) {
   auto longest = post_keyed(*c, std::string(255, 'b'));
   ASSERT_TRUE(longest);
   EXPECT_EQ(longest->status, 202);
+  // An empty key (which the HTTP library drops before any handler sees it) is refused too,
+  // not taken for no key: with or without white space, in any case.
+  for (const std::string line : {"Idempotency-Key:", "idempotency-key: \t "}) {
+    RawConnection conn(server.port());
+    ASSERT_TRUE(conn.send(scene_post("Content-Type: text/plain\r\n" + line + "\r\n", kScene)));
+    auto r = conn.read_response();
+    ASSERT_TRUE(r) << line;
+    EXPECT_EQ(r->status, 400) << line;
+    EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["code"], "invalid_idempotency_key")
+        << line << r->body;
+  }
 }
 
 TEST(ServerRestart, IdempotencyKeysOutliveARestart) {
