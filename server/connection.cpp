@@ -36,29 +36,38 @@ bool same_name(std::string_view a, std::string_view b) {
          });
 }
 
+// Calls f(name, value) for each header line of a request head as it arrived (the value with
+// the white space around it).
+template <class F>
+void each_header(std::string_view head, F&& f) {
+  for (std::size_t at = head.find('\n'); at != std::string_view::npos;) {
+    const std::size_t end = head.find('\n', at + 1);
+    const std::string_view line =
+        head.substr(at + 1, end == std::string_view::npos ? end : end - at - 1);
+    at = end;
+    if (const std::size_t colon = line.find(':'); colon != std::string_view::npos)
+      f(line.substr(0, colon), line.substr(colon + 1));
+  }
+}
+
 // The value of the head's Content-Length line; 0 when there is none or it is not one number
 // (such a request is refused before its body is read, and its connection closed).
 std::size_t declared_length(std::string_view head) {
   std::size_t length = 0;
-  for (std::size_t at = head.find('\n'); at != std::string_view::npos;) {
-    const std::size_t end = head.find('\n', at + 1);
-    std::string_view line = head.substr(at + 1, end == std::string_view::npos ? end : end - at - 1);
-    at = end;
-    const std::size_t colon = line.find(':');
-    if (colon == std::string_view::npos || !same_name(line.substr(0, colon), "Content-Length"))
-      continue;
-    std::size_t value = 0;
+  each_header(head, [&](std::string_view name, std::string_view value) {
+    if (!same_name(name, "Content-Length")) return;
+    std::size_t n = 0;
     bool digits = false;
-    for (char c : line.substr(colon + 1)) {
-      if (c >= '0' && c <= '9' && value < (std::size_t{1} << 60)) {
-        value = value * 10 + static_cast<std::size_t>(c - '0');
+    for (char c : value) {
+      if (c >= '0' && c <= '9' && n < (std::size_t{1} << 60)) {
+        n = n * 10 + static_cast<std::size_t>(c - '0');
         digits = true;
       } else if (c != ' ' && c != '\t' && c != '\r') {
-        return 0;
+        return;
       }
     }
-    if (digits) length = value;
-  }
+    if (digits) length = n;
+  });
   return length;
 }
 
@@ -205,18 +214,13 @@ void GuardedServer::head_complete() {
 bool GuardedServer::head_read() { return current && current->head_complete; }
 
 bool GuardedServer::empty_header(std::string_view name) {
-  if (!current) return false;
-  std::string_view head = current->head;
-  for (std::size_t at = head.find('\n'); at != std::string_view::npos;) {
-    const std::size_t end = head.find('\n', at + 1);
-    std::string_view line = head.substr(at + 1, end == std::string_view::npos ? end : end - at - 1);
-    at = end;
-    const std::size_t colon = line.find(':');
-    if (colon != std::string_view::npos && same_name(line.substr(0, colon), name) &&
-        line.find_first_not_of(" \t\r", colon + 1) == std::string_view::npos)
-      return true;
-  }
-  return false;
+  bool empty = false;
+  if (current)
+    each_header(current->head, [&](std::string_view n, std::string_view value) {
+      empty = empty ||
+              (same_name(n, name) && value.find_first_not_of(" \t\r") == std::string_view::npos);
+    });
+  return empty;
 }
 
 bool GuardedServer::body_cut_short() { return current && current->body_failed; }
