@@ -326,6 +326,21 @@ TEST(Convert, ExportsATexturePathAsAnEscapedPovString) {
   EXPECT_TRUE(contains(pov, R"(image_map { ppm "plain.ppm" once })")) << pov;
 }
 
+// Values that overflow on the way to SDL (a highlight from a specular of 1e308, a texture's
+// scale from dimensions of 1e149) are written as the largest double, never `inf`, which
+// POV-Ray cannot parse.
+TEST(Convert, ExportsNoInfiniteNumberToPov) {
+  const Scene scene = build(model_desc(
+      "camera c { pixeldim 40 30 worlddim 8 6 viewpoint 4 3 5 }\n"
+      "material m { diffuse 1 specular 1e308 }\nlight { location 4 3 2 }\n"
+      "sphere s { material m center 4 3 -4 radius 2 }\n"
+      "texplane t { material m normal 0 0 1 point 0 0 -9 xdir 1 0 0 dimensions 1e149 1e149 "
+      "texname a.ppm }\n"));
+  const std::string pov = write_pov(scene, RenderOptions{});
+  EXPECT_FALSE(contains(pov, "inf")) << pov;
+  EXPECT_TRUE(contains(pov, "1.7976931348623157e+308")) << pov;
+}
+
 TEST(Convert, ExportsTheCameraToPovWithZNegated) {
   std::string pov = write_pov(build(model_desc(kLecture)), RenderOptions{});
   EXPECT_TRUE(contains(pov, "#version 3.7;")) << pov;

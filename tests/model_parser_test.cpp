@@ -379,6 +379,13 @@ TEST(ModelParser, ReportsOutOfRangeValuesAtTheValue) {
       {"material k { shininess -1 }", "-1", "'shininess' must be >= 0, got -1"},
       {"light l { location 0 0 0 emissivity 1 1 -2 }", "-2",
        "'emissivity' values must be >= 0, got -2"},
+      // Nor may a point lie so far out that a distance's square overflows: an eye or a light
+      // there would see, or light, nothing.
+      {"light l { location 4 1e155 -4 emissivity 1 }", "1e155",
+       "'location' coordinates must be within ±1e150 (the squares of distances must fit a "
+       "double), got 1e+155"},
+      {"sphere s { material m center -2e150 0 -5 radius 1 }", "-2e150",
+       "'center' coordinates must be within ±1e150"},
   };
   for (const OutOfRange& c : cases) {
     SCOPED_TRACE(c.line);
@@ -397,6 +404,8 @@ TEST(ModelParser, ReportsOutOfRangeCameraValues) {
        "'pixeldim' values must be integers from 1 to 65535, got -600"},
       {"camera c { pixeldim 8 6 worlddim 0 6 viewpoint 4 3 5 }", "0 6",
        "'worlddim' values must be > 0, got 0"},
+      {"camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 1e155 }", "1e155",
+       "'viewpoint' coordinates must be within ±1e150"},
       {"camera c { pixeldim 800 600 worlddim 8 -6 viewpoint 4 3 5 }", "-6",
        "'worlddim' values must be > 0, got -6"},
   };

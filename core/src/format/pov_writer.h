@@ -2,6 +2,8 @@
 // z is negated; numbers print in their shortest exact form; material i is texture M<i>.
 #pragma once
 
+#include <cmath>
+#include <limits>
 #include <ostream>
 #include <string>
 
@@ -23,9 +25,14 @@ struct PovWriter {
   // A colour or any triple as it is.
   static std::string vec(glm::dvec3 v) {
     v += 0.0;  // -0 prints as 0
-    return "<" + format_number(v.x) + ", " + format_number(v.y) + ", " + format_number(v.z) + ">";
+    return "<" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ">";
   }
-  static std::string num(double v) { return format_number(v); }
+  // A number POV-Ray reads: one that overflowed here (a highlight from a specular of 1e308,
+  // a texture's scale) is written as the largest finite double, which it takes.
+  static std::string num(double v) {
+    if (std::isinf(v)) v = std::copysign(std::numeric_limits<double>::max(), v);
+    return format_number(v);
+  }
   static std::string texture(int material) {
     return "texture { M" + std::to_string(material) + " }";
   }

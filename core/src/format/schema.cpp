@@ -103,6 +103,7 @@ bool value_in_range(const AttrSpec& attr, double v) {
     case V::pixel_dims: return v >= 1 && v <= 65535 && v == std::floor(v);
     case V::window_dims: return v > 0;
     case V::positive: return v > 0 && v <= kMaxLength;
+    case V::point: return std::abs(v) <= kMaxLength;
     case V::colour:
     case V::nonnegative: return v >= 0;
     case V::fraction: return v >= 0 && v <= 1;
@@ -127,6 +128,10 @@ std::string value_problem(const AttrSpec& attr, double v) {
     case V::positive:
       if (!(v > 0)) return "must be > 0";
       if (v > kMaxLength) return "must be at most 1e150 (its square must fit a double)";
+      break;
+    case V::point:
+      if (std::abs(v) > kMaxLength)
+        return "coordinates must be within ±1e150 (the squares of distances must fit a double)";
       break;
     case V::nonnegative:
       if (v < 0) return "must be >= 0";

@@ -13,10 +13,8 @@
 namespace rayfarm {
 namespace {
 
-std::string vec(glm::dvec3 v) {
-  v += 0.0;  // -0 (from negating z) prints as 0
-  return "<" + format_number(v.x) + ", " + format_number(v.y) + ", " + format_number(v.z) + ">";
-}
+std::string vec(glm::dvec3 v) { return PovWriter::vec(v); }
+std::string num(double v) { return PovWriter::num(v); }
 glm::dvec3 pov(glm::dvec3 v) { return {v.x, v.y, -v.z}; }
 
 }  // namespace
@@ -68,13 +66,13 @@ std::string write_pov(const Scene& scene, const RenderOptions& options) {
     double highlight = (m.specular.x + m.specular.y + m.specular.z) / 3;
     out << "#declare M" << i << " = texture { // " << m.name << "\n  pigment { color rgb "
         << vec(m.diffuse);
-    if (m.transparency > 0) out << " transmit " << format_number(m.transparency);
+    if (m.transparency > 0) out << " transmit " << num(m.transparency);
     out << " }\n  finish { ambient " << vec(m.ambient / typical) << " diffuse 1";
     if (highlight > 0) {
       out << (options.highlight == Highlight::blinn ? " specular " : " phong ")
-          << format_number(highlight) << (options.highlight == Highlight::blinn ? " roughness "
+          << num(highlight) << (options.highlight == Highlight::blinn ? " roughness "
                                                                                  : " phong_size ")
-          << format_number(options.highlight == Highlight::blinn ? 1 / std::max(shininess, 1e-9)
+          << num(options.highlight == Highlight::blinn ? 1 / std::max(shininess, 1e-9)
                                                                  : shininess)
           << " reflection { " << vec(m.specular) << " }";
     }
