@@ -225,7 +225,10 @@ class LocalBackend final : public Backend {
       }
     }
     if (!fs::is_regular_file(file, ec)) {
-      s.error = "your image " + test.image + " was not found" + found_like(test.image);
+      s.error = "your image " + test.image +
+                (fs::is_directory(file, ec) ? " is a folder, not an image file"
+                 : fs::exists(file, ec)     ? " is not a regular file"
+                                            : " was not found" + found_like(test.image));
       return s;
     }
     // Links within the folder are fine; one out of it could hand in any file this grader

@@ -1,10 +1,12 @@
 // The command line's own words: help footers, range checks that name the option and the
 // accepted range, and CLI11's parse errors rephrased ("--width given twice").
+#include <optional>
 #include <string_view>
 #include <vector>
 
 #include "cli_common.h"
 #include "rayfarm/diagnostic.h"
+#include "rayfarm/model_parser.h"
 #include "rayfarm/options.h"
 
 namespace rayfarm::cli {
@@ -124,14 +126,9 @@ CLI::Option* number_range(CLI::Option* option, double lo, double hi) {
   return option
       ->check(CLI::Validator(
           [lo, hi, range](std::string& v) -> std::string {
-            double n = 0;
-            size_t used = 0;
-            try {
-              n = std::stod(v, &used);
-            } catch (const std::exception&) {
-              used = 0;
-            }
-            if (used == 0 || used != v.size() || !(n >= lo && n <= hi))
+            // As a scene's numbers are read: a subnormal (2e-308) is a number too.
+            const std::optional<double> n = parse_number(v);
+            if (!n || !(*n >= lo && *n <= hi))
               return "must be a number in " + range + ", got '" + v + "'";
             return "";
           },

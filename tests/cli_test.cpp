@@ -129,6 +129,10 @@ TEST_F(GradeCli, AMissingImageNamesAFileCloseToItsName) {
   EXPECT_EQ(j["tests"][3]["message"],
             "your image glint.png was not found; a file named 'Glnt.png' is there");
   EXPECT_EQ(j["tests"][0]["score"], 2);
+  // A folder by the image's name is said to be one (not "not found; it is there").
+  fs::create_directory(images / "glint.png");
+  Json folder = grade(q(kLab + "/lab1.json") + " --images " + q(images.string()));
+  EXPECT_EQ(folder["tests"][3]["message"], "your image glint.png is a folder, not an image file");
 }
 
 TEST_F(GradeCli, PlatformFilesAreWrittenWhereAsked) {
@@ -262,6 +266,9 @@ TEST(CompareCli, ExitsAsDiffDoes) {
   EXPECT_EQ(run(kRayfarm + " compare " + ada + " " + ben).code, 1);
   EXPECT_EQ(run(kRayfarm + " compare " + ada + " " + ben + " --threshold 1").code, 0);
   EXPECT_EQ(run(kRayfarm + " compare " + ada + " " + ben + " --max-bad-fraction 0.9").code, 0);
+  // A subnormal fraction is a number (it allows no differing pixel here).
+  EXPECT_EQ(run(kRayfarm + " compare " + ada + " " + ada + " --max-bad-fraction 2e-308").code, 0);
+  EXPECT_EQ(run(kRayfarm + " compare " + ada + " " + ben + " --max-bad-fraction 2e-308").code, 1);
   EXPECT_EQ(run(kRayfarm + " compare " + ada + " " + q(kLab + "/lab1.json")).code, 2);
   Json j = Json::parse(run(kRayfarm + " compare --json " + ada + " " + ada).out);
   EXPECT_TRUE(j["psnr"].is_null());

@@ -285,15 +285,20 @@ TEST(ImageIo, EmptyIdatChunksAreSkipped) {
   decode_error(with_empty.substr(0, 33 + 8));  // the empty IDAT cut before its CRC
 }
 
-// A PNG cut after its header, or without its IEND chunk, says why it cannot be read (the
-// message ended at "cannot decode PNG: ").
+// A PNG cut anywhere after its header says it was cut short, in words (stb_image's own
+// reasons are codes such as "outofdata", or a chunk type's first letters).
 TEST(ImageIo, ACutPngSaysSo) {
-  const std::string png = make_png(2, 2, 8, 2, std::string("\0abcdef\0ghijkl", 14));
-  for (const std::string& cut : {png.substr(0, 33), png.substr(0, png.size() - 12)}) {
-    const std::string why = decode_error(cut);
-    EXPECT_EQ(why.rfind("cannot decode PNG: ", 0), 0u) << why;
-    EXPECT_GT(why.size(), std::string("cannot decode PNG: ").size() + 5) << why;
+  const std::vector<unsigned char> png = encode_png(random_image(9, 7, 5));
+  std::size_t refused = 0;
+  for (std::size_t n = 33; n + 12 < png.size(); ++n) {
+    std::string why;
+    if (decode_image(view(png).substr(0, n), &why)) continue;
+    ++refused;
+    EXPECT_EQ(why, "cannot decode PNG: the file is cut short (it does not end with the IEND "
+                   "chunk)")
+        << n;
   }
+  EXPECT_GT(refused, 20u);
 }
 
 TEST(ImageIo, PngDataInflatingFarBeyondItsHeaderIsRefused) {

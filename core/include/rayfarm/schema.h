@@ -15,7 +15,9 @@ namespace rayfarm {
 enum class ValueKind {
   pixel_dims,    // 2 integers >= 1
   window_dims,   // 2 numbers > 0
-  point,         // 3 numbers, each within ±kMaxLength
+  point,         // 3 numbers
+  position,      // 3 numbers within ±kMaxLength: where distances are measured from (an eye,
+                 // a light, a sphere's centre, a revsurf's base), squared
   colour,        // 3 numbers >= 0, or 1 meaning all three
   positive,      // 1 number > 0 and at most kMaxLength (a radius, a height)
   nonnegative,   // 1 number >= 0
@@ -27,9 +29,9 @@ enum class ValueKind {
   word,          // a texture name or a file path: any word
 };
 
-// The largest radius or height, and |coordinate| of a point: its square, which the hit tests
-// and the lengths of rays compute, must fit a double (a sphere of radius 1e160 would vanish
-// rather than fill the view, an eye at 1e155 would see nothing).
+// The largest radius or height, and |coordinate| of a position: its square, which the hit
+// tests and the lengths of rays compute, must fit a double (a sphere of radius 1e160 would
+// vanish rather than fill the view, an eye at 1e155 would see nothing).
 inline constexpr double kMaxLength = 1e150;
 
 struct AttrSpec {

@@ -76,6 +76,7 @@ std::array<int, 2> value_count(ValueKind kind) {
     case V::pixel_dims:
     case V::window_dims: return {2, 2};
     case V::point:
+    case V::position:
     case V::direction: return {3, 3};
     case V::colour: return {1, 3};
     case V::positive:
@@ -103,7 +104,7 @@ bool value_in_range(const AttrSpec& attr, double v) {
     case V::pixel_dims: return v >= 1 && v <= 65535 && v == std::floor(v);
     case V::window_dims: return v > 0;
     case V::positive: return v > 0 && v <= kMaxLength;
-    case V::point: return std::abs(v) <= kMaxLength;
+    case V::position: return std::abs(v) <= kMaxLength;
     case V::colour:
     case V::nonnegative: return v >= 0;
     case V::fraction: return v >= 0 && v <= 1;
@@ -129,7 +130,7 @@ std::string value_problem(const AttrSpec& attr, double v) {
       if (!(v > 0)) return "must be > 0";
       if (v > kMaxLength) return "must be at most 1e150 (its square must fit a double)";
       break;
-    case V::point:
+    case V::position:
       if (std::abs(v) > kMaxLength)
         return "coordinates must be within ±1e150 (the squares of distances must fit a double)";
       break;
@@ -159,6 +160,7 @@ std::string describe(const AttrSpec& attr) {
     case V::pixel_dims: return "2 integers >= 1";
     case V::window_dims: return "2 numbers > 0";
     case V::point: return "3 numbers";
+    case V::position: return "3 numbers";  // the range is said when a value is out of it
     case V::direction: return "3 numbers, not all 0";
     case V::colour: return "3 numbers >= 0, or 1 number for all three";
     case V::positive: return "1 number > 0";

@@ -95,10 +95,14 @@ std::optional<Image> decode_png(std::string_view bytes, std::string* error, long
   if (png.rgb.empty()) {
     // With the limit above, running out of memory almost always means hostile sizes.
     if (png.error == "outofmem") return fail(error, "cannot decode PNG: data larger than its size");
-    // (stb_image names no reason for some damage: the data cut short, the IEND chunk missing.)
-    return fail(error, "cannot decode PNG: " +
-                           (png.error.empty() ? std::string("the file is cut short or damaged")
-                                              : png.error));
+    // stb_image's reasons are terse codes ("outofdata"), and some damage has none: a file
+    // that does not end with its IEND chunk was cut short, whatever stb met first.
+    constexpr std::string_view kIend("\0\0\0\0IEND\xae\x42\x60\x82", 12);
+    if (!bytes.ends_with(kIend))
+      return fail(error, "cannot decode PNG: the file is cut short (it does not end with the "
+                         "IEND chunk)");
+    return fail(error, "cannot decode PNG: the data is damaged" +
+                           (png.error.empty() ? std::string() : " (" + png.error + ")"));
   }
   Image image;
   image.width = png.width;

@@ -233,7 +233,9 @@ ShapeBounds shape_bounds(const PreparedScene<T>& p) {
   out.tight.reserve(p.shapes.size());
   for (const PreparedShape<T>& s : p.shapes) {
     const BvhBox b = shape_box(s);
-    for (const glm::dvec3& c : {b.lo, b.hi})
+    // The shape's tests work from its point, which may lie far outside its box (a triangle
+    // in a plane written through a point 1e17 away): their rounding is of that size.
+    for (const glm::dvec3& c : {b.lo, b.hi, glm::dvec3(s.point)})
       out.scale = std::max({out.scale, std::abs(c.x), std::abs(c.y), std::abs(c.z)});
     out.tight.push_back({(b.lo + b.hi) / 2.0, glm::length(b.hi - b.lo) / 2});
   }

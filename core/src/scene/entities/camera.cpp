@@ -8,7 +8,7 @@ using V = ValueKind;
 constexpr AttrSpec kAttrs[] = {
     {"pixeldim", V::pixel_dims, true},
     {"worlddim", V::window_dims, true},
-    {"viewpoint", V::point, true},
+    {"viewpoint", V::position, true},
 };
 
 void build(EntityReader& r, Scene& scene) {

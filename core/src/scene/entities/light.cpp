@@ -10,17 +10,17 @@ namespace {
 
 using V = ValueKind;
 constexpr AttrSpec kLightAttrs[] = {
-    {"location", V::point, true},
+    {"location", V::position, true},
     {"emissivity", V::colour, false, {1, 1, 1}},
 };
 constexpr AttrSpec kSpotAttrs[] = {
-    {"location", V::point, true},
+    {"location", V::position, true},
     {"emissivity", V::colour, false, {1, 1, 1}},
     {"point", V::point, true},
     {"theta", V::angle, true},
 };
 constexpr AttrSpec kProjectorAttrs[] = {
-    {"location", V::point, true},
+    {"location", V::position, true},
     {"emissivity", V::colour, false, {1, 1, 1}},
     {"point", V::point, true},
     {"normal", V::direction, true},

@@ -15,7 +15,7 @@ using V = ValueKind;
 constexpr AttrSpec kAttrs[] = {
     {"material", V::material_ref, true},
     {"surfer", V::integer, true, {0, 0, 0}, 1, 3},
-    {"base", V::point, true},
+    {"base", V::position, true},
     {"direction", V::direction, true},
     {"height", V::positive, true},
 };

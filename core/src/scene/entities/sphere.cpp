@@ -7,7 +7,7 @@ namespace {
 using V = ValueKind;
 constexpr AttrSpec kAttrs[] = {
     {"material", V::material_ref, true},
-    {"center", V::point, true},
+    {"center", V::position, true},
     {"radius", V::positive, true},
 };
 
