@@ -56,10 +56,23 @@ std::string shell_quote(const std::string& s) {
   return out + "'";
 }
 
-std::string replace_all(std::string s, const std::string& from, const std::string& to) {
-  for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
-    s.replace(at, from.size(), to);
-  return s;
+// The command with each placeholder replaced in one pass over it, so that a value (a scene's
+// path holding "{name}") is never expanded again inside another's quotes.
+std::string expand(const std::string& command,
+                   const std::vector<std::pair<std::string, std::string>>& values) {
+  std::string out;
+  for (std::size_t i = 0; i < command.size();) {
+    bool replaced = false;
+    for (const auto& [key, value] : values)
+      if (command.compare(i, key.size(), key) == 0) {
+        out += value;
+        i += key.size();
+        replaced = true;
+        break;
+      }
+    if (!replaced) out += command[i++];
+  }
+  return out;
 }
 
 fs::path default_cache() {
@@ -228,7 +241,9 @@ class LocalBackend final : public Backend {
       s.error = "your image " + test.image +
                 (fs::is_directory(file, ec) ? " is a folder, not an image file"
                  : fs::exists(file, ec)     ? " is not a regular file"
-                                            : " was not found" + found_like(test.image));
+                 : fs::is_symlink(fs::symlink_status(file, ec))
+                     ? " is a link to a file that does not exist"
+                     : " was not found" + found_like(test.image));
       return s;
     }
     // Links within the folder are fine; one out of it could hand in any file this grader
@@ -272,9 +287,9 @@ class LocalBackend final : public Backend {
     const fs::path out = dir / fs::path(test.image).filename();
     fs::remove(out, ec);
     const fs::path scene_path = fs::absolute(base_ / (scene ? scene->path : test.scene), ec);
-    std::string command = replace_all(args_.run, "{scene}", shell_quote(scene_path.string()));
-    command = replace_all(command, "{out}", shell_quote(out.string()));
-    command = replace_all(command, "{name}", shell_quote(test.name));
+    const std::string command = expand(args_.run, {{"{scene}", shell_quote(scene_path.string())},
+                                                   {"{out}", shell_quote(out.string())},
+                                                   {"{name}", shell_quote(test.name)}});
     RunOutcome r = run_limited(command, !to_file, args_.timeout, args_.memory_mb);
     s.log_tail = output_tail(r.log, kLogTail);
     if (!r.started) {
@@ -302,7 +317,9 @@ class LocalBackend final : public Backend {
     if (to_file) {
       // A link would let the program hand in any file this grader can read (a cached
       // reference among them): the image must be a file of its own.
-      if (fs::is_symlink(fs::symlink_status(out, ec))) {
+      // A hard link is a second name of a file that was there before the run.
+      if (fs::is_symlink(fs::symlink_status(out, ec)) ||
+          (fs::is_regular_file(out, ec) && fs::hard_link_count(out, ec) > 1)) {
         fs::remove(out, ec);
         s.error = "your program wrote a link, not an image (" + s.note + ")";
         return s;
@@ -350,7 +367,37 @@ bool emit(const GradeArgs& args, const GradeResult& result, Format format) {
   return write_output(args.out, text.data(), text.size());
 }
 
+// The score is below `percent` of the points: compared as products, so that 57 of 100 points
+// is not below 57% (100 * 0.57 is 56.99999999999999).
+bool below(const GradeResult& result, double percent) {
+  if (result.max_score > 0) return 100 * result.score < percent * result.max_score;
+  return 100 * result.fraction() < percent;
+}
+
 }  // namespace
+
+void grade_command_line_refused(int argc, char** argv, const std::string& why) {
+  GradeArgs args;
+  for (int i = 2; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&](const std::string& flag, std::string& into) {
+      if (arg == flag && i + 1 < argc) {
+        into = argv[++i];
+        return true;
+      }
+      if (arg.rfind(flag + "=", 0) != 0) return false;
+      into = arg.substr(flag.size() + 1);
+      return true;
+    };
+    if (value("-o", args.out) || value("--output", args.out) || value("--format", args.format))
+      continue;
+    if (arg.size() > 2 && arg.rfind("-o", 0) == 0) args.out = arg.substr(2);  // -oFILE
+  }
+  if (args.out.empty() || args.out == "-") return;
+  GradeResult result;
+  set_grader_error(result, "the grader's command line is wrong: " + why);
+  emit(args, result, parse_format(args.format).value_or(Format::md));
+}
 
 Runner add_grade(CLI::App& app) {
   auto args = std::make_shared<GradeArgs>();
@@ -399,11 +446,14 @@ Runner add_grade(CLI::App& app) {
                    "html or md\n";
       return kBadInput;
     }
+    GradeResult result;
     if (!args->freeze && args->images.empty() && args->run.empty()) {
       std::cerr << "rayfarm: give the student's images (--images DIR) or program (--run CMD)\n";
+      set_grader_error(result, "the grader's command line is wrong: it names neither the "
+                               "student's images (--images) nor their program (--run)");
+      if (args->out != "-") emit(*args, result, *format);
       return kBadInput;
     }
-    GradeResult result;
     std::string why;
     auto text = read_input(args->assignment, &why);
     if (!text) {
@@ -422,7 +472,8 @@ Runner add_grade(CLI::App& app) {
     std::error_code dir_ec;
     if (!args->images.empty() && !fs::is_directory(args->images, dir_ec)) {
       result.assignment = assignment->name;
-      result.error = "the images folder " + args->images + " does not exist";
+      result.error = "the images folder " + args->images +
+                     (fs::exists(args->images, dir_ec) ? " is not a folder" : " does not exist");
       std::cerr << "rayfarm: " << result.error << "\n";
       if (args->out != "-") emit(*args, result, *format);
       return kBadInput;
@@ -475,7 +526,7 @@ Runner add_grade(CLI::App& app) {
     if (args->out != "-")
       std::cerr << "rayfarm: " << result.assignment << ": " << result.score << " / "
                 << result.max_score << " points\n";
-    if (args->fail_under >= 0 && 100 * result.fraction() < args->fail_under) return kNo;
+    if (args->fail_under >= 0 && below(result, args->fail_under)) return kNo;
     return kOk;
   };
 }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <functional>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -20,5 +21,9 @@ Runner add_status(CLI::App& app);
 Runner add_cancel(CLI::App& app);
 Runner add_wait(CLI::App& app);
 Runner add_jobs(CLI::App& app);
+
+// grade's command line was refused before its runner could start: the result file that -o
+// names (if any) still gets a grader error, as docs/grading.md promises the platform.
+void grade_command_line_refused(int argc, char** argv, const std::string& why);
 
 }  // namespace rayfarm::cli

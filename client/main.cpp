@@ -53,7 +53,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << usage_message(app, e);
+    const std::string message = usage_message(app, e);
+    std::cerr << message;
+    if (argc > 1 && std::string(argv[1]) == "grade")
+      grade_command_line_refused(argc, argv, message.substr(9, message.find('\n') - 9));
     return kBadInput;
   }
   for (auto& [sub, run] : runners)

@@ -414,7 +414,17 @@ void get_index(Service& svc, const Request& req, Response& res) {
 
 void HttpApi::routes() {
   auto to = [this](RouteHandler handler) {
-    return [this, handler](const Request& req, Response& res) { handler(service_, req, res); };
+    return [this, handler](const Request& req, Response& res) {
+      // The library takes a part without a name (a Content-Disposition with no name="...")
+      // as the part "": no route names one, so no route has to tell it from a missing part.
+      if (req.is_multipart_form_data() && req.files.count("") > 0) {
+        GuardedServer::close_after(res);
+        return send_error(res, 400, "bad_multipart",
+                          "a part of the multipart/form-data body has no name: each part's "
+                          "Content-Disposition needs name=\"...\"");
+      }
+      handler(service_, req, res);
+    };
   };
   server_.Post("/render", to(post_render));
   server_.Get(R"(/jobs/([0-9a-f]{32}))", to(get_job));

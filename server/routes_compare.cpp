@@ -8,6 +8,7 @@
 #include "http_util.h"
 #include "rayfarm/compare.h"
 #include "rayfarm/image_io.h"
+#include "rayfarm/model_parser.h"
 #include "routes.h"
 
 namespace rayfarm::server {
@@ -110,13 +111,12 @@ void post_compare(Service& svc, const Request& req, Response& res) {
                                                      v.substr(0, 40) + "'"));
       (k == "diff" ? diff : options.neighborhood) = *on;
     } else if (k == "max_bad_fraction") {
-      try {
-        size_t used = 0;
-        max_bad_fraction = std::stod(v, &used);
-        if (used != v.size() || !(max_bad_fraction >= 0 && max_bad_fraction <= 1)) throw 0;
-      } catch (...) {
+      // Read as a scene's numbers are, and as the command line reads the same option (no
+      // hexadecimal, a subnormal taken).
+      const std::optional<double> f = parse_number(v);
+      if (!f || !(*f >= 0 && *f <= 1))
         return send_error(res, invalid_option(k, "max_bad_fraction must be a number in 0..1"));
-      }
+      max_bad_fraction = *f;
     } else if (with_scene && find_option(k)) {
       render_params.emplace_back(k, v);
     } else {

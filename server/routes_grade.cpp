@@ -69,13 +69,21 @@ class FolderFiles final : public Files {
   fs::path root_;
 };
 
-// A scene's textures resolve against the scene's own folder (a plain join, checked by Files).
+// A scene's textures resolve against the scene's own folder, to the path relative to the
+// assignment that names their part ("files/texplane/../images/b.ppm" is "files/images/b.ppm");
+// Files checks that it stays inside.
 class SceneTextures final : public ResourceResolver {
  public:
   SceneTextures(const Files& files, std::string folder, long long max_pixels)
       : files_(files), folder_(std::move(folder)), max_pixels_(max_pixels) {}
   std::optional<std::string> read(const std::string& path, std::string& error) const override {
-    return files_.read(folder_.empty() ? path : folder_ + "/" + path, error);
+    const fs::path joined = folder_.empty() ? fs::path(path) : fs::path(folder_) / path;
+    const std::string name = joined.lexically_normal().generic_string();
+    if (joined.is_absolute() || name == ".." || name.rfind("../", 0) == 0) {
+      error = "'" + path.substr(0, 200) + "' is outside the assignment's folder";
+      return std::nullopt;
+    }
+    return files_.read(name, error);
   }
   long long max_pixels() const override { return max_pixels_; }
 
@@ -264,9 +272,12 @@ void post_grade(Service& svc, const Request& req, Response& res) {
     const Diagnostic* d = diags.first_error();
     ApiError e = api_error(400, "invalid_assignment", d->message);
     e.path = d->where.path;
-    if (d->where.line > 0)
+    if (d->where.line > 0) {  // a syntax error: placed as a scene's are, and in the message
+      e.line = d->where.line;
+      e.column = d->where.column;
       e.message = "line " + std::to_string(d->where.line) + ", column " +
                   std::to_string(d->where.column) + ": " + d->message;
+    }
     return send_error(res, e);
   }
   if (assignment->tests.size() > kMaxTests)

@@ -249,6 +249,80 @@ TEST_F(GradeCli, AStudentsProgramUnderRun) {
   EXPECT_EQ(slow["tests"][0]["message"], "your program ran past the time limit of 0.5 s and was stopped");
 }
 
+// --fail-under compares exactly: 57 of 100 points is not below 57%.
+TEST_F(GradeCli, FailUnderIsExactAtItsPercentage) {
+  fs::copy(kLab + "/scenes", dir_ / "scenes");
+  std::ofstream(dir_ / "a.json") << R"({"name": "x", "profile": "cpsc102", "tests": [
+      {"name": "s", "scene": "scenes/spheres.txt", "image": "spheres.png", "points": 57},
+      {"name": "m", "scene": "scenes/mirror.txt", "image": "mirror.png", "points": 43}]})";
+  fs::create_directories(dir_ / "st");
+  fs::copy_file(kLab + "/students/ada/spheres.png", dir_ / "st/spheres.png");
+  fs::copy_file(kLab + "/students/ben/mirror.png", dir_ / "st/mirror.png");
+  const std::string args = q((dir_ / "a.json").string()) + " --images " + q((dir_ / "st").string());
+  EXPECT_EQ(grade(args)["score"], 57);
+  EXPECT_EQ(run(kRayfarm + " grade " + args + cache_ + " --fail-under 57 -o /dev/null").code, 0);
+  EXPECT_EQ(run(kRayfarm + " grade " + args + cache_ + " --fail-under 57.01 -o /dev/null").code, 1);
+}
+
+// A command line the grader refuses still leaves the platform a result that says so.
+TEST_F(GradeCli, ABadCommandLineStillWritesAResult) {
+  const std::string assignment = q(kLab + "/lab1.json");
+  const fs::path none = dir_ / "none.json", threads = dir_ / "out/threads.json";
+  EXPECT_EQ(run(kRayfarm + " grade " + assignment + cache_ + " --format json -o " + q(none.string())).code, 2);
+  std::ifstream in(none);
+  Json j = Json::parse(in, nullptr, false);
+  ASSERT_FALSE(j.is_discarded());
+  EXPECT_NE(j["error"].get<std::string>().find("--images"), std::string::npos) << j;
+  EXPECT_EQ(run(kRayfarm + " grade " + assignment + " --images " + q(kLab + "/students/ada") +
+                " --threads 2000 --format=gradescope -o" + threads.string()).code, 2);
+  std::ifstream in2(threads);
+  Json g = Json::parse(in2, nullptr, false);
+  ASSERT_FALSE(g.is_discarded());
+  EXPECT_EQ(g["score"], 0);
+  EXPECT_NE(g["output"].get<std::string>().find("--threads"), std::string::npos) << g;
+  // A file named where the folder of images belongs is told apart from a missing folder.
+  const fs::path file = dir_ / "file.json";
+  EXPECT_EQ(run(kRayfarm + " grade " + assignment + " --images " + assignment + cache_ +
+                " --format json -o " + q(file.string())).code, 2);
+  std::ifstream in3(file);
+  Json f = Json::parse(in3, nullptr, false);
+  ASSERT_FALSE(f.is_discarded());
+  EXPECT_NE(f["error"].get<std::string>().find("is not a folder"), std::string::npos) << f;
+}
+
+// --run's placeholders are replaced in one pass: a scene path holding "{name}" does not get
+// the test's name spliced into its quotes (where a name's $(...) would run).
+TEST_F(GradeCli, RunPlaceholdersAreQuotedWhateverTheyHold) {
+  fs::copy(kLab + "/scenes", dir_ / "s{name}");
+  const fs::path marker = dir_ / "INJECTED";
+  Json a = {{"name", "x"},
+            {"profile", "cpsc102"},
+            {"tests", {{{"name", "t $(touch " + marker.string() + ")"},
+                        {"scene", "s{name}/spheres.txt"},
+                        {"image", "spheres.png"}}}}};
+  std::ofstream(dir_ / "a.json") << a.dump();
+  const std::string program = "test -f {scene} && cp " + kLab + "/students/ada/spheres.png {out}";
+  Json j = grade(q((dir_ / "a.json").string()) + " --run " + q(program));
+  EXPECT_EQ(j["score"], 1) << j;
+  EXPECT_FALSE(fs::exists(marker));
+}
+
+// A hard link is a link too: a program under --run cannot hand in a file that was there
+// before it ran; and a link to nothing is said to be one.
+TEST_F(GradeCli, LinksOfEveryKindAreNoImage) {
+  fs::copy(kLab + "/students/ada", dir_ / "ada");
+  const std::string assignment = q(kLab + "/lab1.json");
+  Json hard = grade(assignment + " --run " +
+                    q("ln " + (dir_ / "ada").string() + "/$(basename {scene} .txt).png {out}"));
+  EXPECT_EQ(hard["score"], 0);
+  EXPECT_EQ(hard["tests"][0]["message"].get<std::string>().rfind("your program wrote a link", 0), 0u)
+      << hard["tests"][0]["message"];
+  fs::remove(dir_ / "ada/glint.png");
+  fs::create_symlink(dir_ / "ada/nowhere.png", dir_ / "ada/glint.png");
+  Json dangling = grade(assignment + " --images " + q((dir_ / "ada").string()));
+  EXPECT_EQ(dangling["tests"][3]["message"], "your image glint.png is a link to a file that does not exist");
+}
+
 TEST_F(GradeCli, AssignmentErrorsArePlaced) {
   std::ofstream(dir_ / "bad.json") << R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "pionts": 2}]})";
   Outcome r = run(kRayfarm + " grade " + q((dir_ / "bad.json").string()) + " --images . 2>&1");

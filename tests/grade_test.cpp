@@ -13,6 +13,7 @@
 #include "rayfarm/image_io.h"
 #include "rayfarm/render.h"
 #include "test_util.h"
+#include "util/utf8.h"
 
 namespace rayfarm::grading {
 namespace {
@@ -221,6 +222,10 @@ TEST(Assignment, ErrorsArePlacedByTheirJsonPath) {
   EXPECT_EQ(first_error(R"({"name": "x", "profile": "cpsc103", "tests": [{"name": "a", "scene": "a.txt"}]})").substr(0, 9),
             "/profile:");
   EXPECT_EQ(first_error(R"({"name": "x", "tests": []})"), "/tests: must be a non-empty list of tests");
+  // A whole number past int's range is no 0 or 1 (4294967297 was read as 1).
+  for (const char* n : {"4294967297", "-4294967295", "18446744073709551615", "2"})
+    EXPECT_EQ(first_error(std::string(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "neighborhood": )") + n + "}]}"),
+              "/tests/0/neighborhood: must be 0 or 1") << n;
   // Syntax errors have a line and column.
   EXPECT_EQ(first_error("{\"name\": \"x\",\n  \"tests\": [\n    {\"name\": \"a\" \"scene\": 1}]}").substr(0, 2), "3:");
   // So does a number past double's range (it threw out of the parser: the grader aborted).
@@ -303,6 +308,60 @@ TEST(Grade, CreditRulesGivePartialPoints) {
   EXPECT_EQ(forgiven.status, "passed");
   TestResult fraction = grade_one(off, R"(, "points": 10, "max_bad_fraction": 1)");
   EXPECT_EQ(fraction.status, "passed");
+}
+
+// With a scale of credit, full points are a pass whatever max_bad_fraction says (it belongs to
+// "all"), and the message does not quote it.
+TEST(Grade, FullPointsOnAScaleAreAPass) {
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  Image off = ref;
+  off.rgb[0] = static_cast<std::uint8_t>(off.rgb[0] ^ 8);  // one channel of one pixel
+  TestResult linear = grade_one(off, R"(, "points": 3, "credit": {"linear": {"metric": "max_abs", "full": 8, "zero": 20}})");
+  EXPECT_EQ(linear.score, 3);
+  EXPECT_EQ(linear.status, "passed");
+  EXPECT_EQ(linear.message.find("may"), std::string::npos) << linear.message;
+  TestResult steps = grade_one(off, R"(, "points": 3, "credit": {"metric": "bad_fraction", "steps": [[0.001, 1], [0.02, 0.5]]})");
+  EXPECT_EQ(steps.score, 3);
+  EXPECT_EQ(steps.status, "passed");
+  TestResult all = grade_one(off, R"(, "points": 3)");
+  EXPECT_EQ(all.score, 0);
+  EXPECT_EQ(all.status, "failed");
+  EXPECT_NE(all.message.find("1 of 3072 pixels differ by more than 0 levels (0.03%; none may)"),
+            std::string::npos) << all.message;
+  // The metrics line says the numbers as the message does (it said 0.033% and a mean of 0).
+  GradeResult r;
+  r.tests.push_back(all);
+  const std::string output =
+      Json::parse(write_result(r, Format::gradescope))["tests"][0]["output"].get<std::string>();
+  EXPECT_NE(output.find("differing pixels 1 (0.03%), mean difference 0.0008681,"),
+            std::string::npos)
+      << output;
+}
+
+// Points are kept to 1/10000, as scores are: full marks are the points exactly, and an
+// assignment worth nothing is all there is to have once every test passes.
+TEST(Grade, PointsAreKeptAsScoresAre) {
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  FakeBackend b;
+  b.scenes["lab.txt"] = kScene;
+  b.images["lab.ppm"] = ref;
+  Assignment a = parse_ok(R"({"name": "Lab", "profile": "cpsc102", "tests": [
+      {"name": "a", "scene": "lab.txt", "points": 0.3333333333},
+      {"name": "b", "scene": "lab.txt", "points": 0.1},
+      {"name": "c", "scene": "lab.txt", "points": 0.2}]})");
+  EXPECT_EQ(a.tests[0].points, 0.3333);
+  GradeResult r = grade(a, b, {});
+  for (const TestResult& t : r.tests) {
+    EXPECT_EQ(t.status, "passed") << t.name;
+    EXPECT_EQ(t.score, t.max_score) << t.name;
+  }
+  EXPECT_EQ(r.score, r.max_score);
+  EXPECT_EQ(r.fraction(), 1);
+  Assignment free = parse_ok(R"({"name": "Lab", "profile": "cpsc102", "tests": [
+      {"name": "a", "scene": "lab.txt", "points": 0}]})");
+  EXPECT_EQ(grade(free, b, {}).fraction(), 1);
+  b.images["lab.ppm"] = Image(64, 48);
+  EXPECT_EQ(grade(free, b, {}).fraction(), 0);
 }
 
 // Each mistake, made: the hint names it.
@@ -635,6 +694,12 @@ TEST(Formats, BytesThatAreNotUtf8BecomeReplacementCharacters) {
   const std::string body = autolab.substr(0, autolab.size() - 1);
   Json last;
   EXPECT_NO_THROW(last = Json::parse(body.substr(body.find_last_of('\n') + 1)));
+  // The plain-text reports are UTF-8 throughout too: the student's bytes are replaced.
+  for (Format f : {Format::autolab, Format::md}) {
+    const std::string text = write_result(r, f);
+    EXPECT_EQ(printable_text(text), text) << to_string(f);
+    EXPECT_NE(text.find("st\xef\xbf\xbdu.ppm"), std::string::npos) << to_string(f);
+  }
 }
 
 TEST(Lock, RefusesReferencesThatChanged) {
@@ -649,6 +714,16 @@ TEST(Lock, RefusesReferencesThatChanged) {
   Json extra = lock;
   extra["tests"]["old"] = {{"reference_sha256", "x"}};
   EXPECT_EQ(check_lock(r, extra).size(), 1u);
+  // A lock edited by hand: entries of the wrong type are problems, not a crash.
+  for (const Json& entry : {Json(5), Json({{"reference_sha256", 5}}), Json::array(),
+                            Json({{"reference_key", 1}})}) {
+    Json odd = lock;
+    odd["tests"]["round"] = entry;
+    std::vector<std::string> found;
+    ASSERT_NO_THROW(found = check_lock(r, odd)) << entry.dump();
+    ASSERT_EQ(found.size(), 1u) << entry.dump();
+    EXPECT_NE(found[0].find("test 'round'"), std::string::npos) << found[0];
+  }
 }
 
 }  // namespace

@@ -184,6 +184,18 @@ TEST(ImageIo, SixteenBitP6IsBigEndianAndScaledTo8Bits) {
   EXPECT_EQ(decode_ok("P3 1 1 1000 1000 0 500").rgb, (std::vector<std::uint8_t>{255, 0, 128}));
 }
 
+// The same 16-bit samples in a PNG and in a PPM are the same picture: both are scaled to the
+// nearest level (a high byte alone made 0xFF00 255 from the PNG and 254 from the PPM).
+TEST(ImageIo, SixteenBitPngAndPpmScaleAlike) {
+  std::string samples;
+  for (int v : {0xff00, 0x0000, 0x8080, 0x7fff, 0x0080, 0x007f, 0xffff, 0x3c00, 0x0101})
+    samples += {static_cast<char>(v >> 8), static_cast<char>(v & 0xff)};
+  const std::vector<std::uint8_t> png = decode_ok(make_png(3, 1, 16, 2, '\0' + samples)).rgb;
+  const std::vector<std::uint8_t> ppm = decode_ok("P6\n3 1\n65535\n" + samples).rgb;
+  EXPECT_EQ(png, ppm);
+  EXPECT_EQ(png, (std::vector<std::uint8_t>{254, 0, 128, 127, 0, 0, 255, 60, 1}));
+}
+
 TEST(ImageIo, TruncatedPpmDataReportsWhatWasMissing) {
   EXPECT_EQ(decode_error("P6\n2 2\n255\nabcde"), "truncated PPM data: expected 12 bytes, got 5");
   EXPECT_EQ(decode_error("P6\n2 2\n65535\nabcde"), "truncated PPM data: expected 24 bytes, got 5");

@@ -1237,6 +1237,15 @@ TEST(ServerCompare, ThresholdAndNeighborhoodAreTheGradersRules) {
   auto bad = c->Post("/compare?threshold=abc", items);
   ASSERT_TRUE(bad);
   EXPECT_EQ(bad->status, 400);
+  // max_bad_fraction reads numbers as `rayfarm compare` does: a subnormal is one, hexadecimal
+  // is not.
+  auto tiny = c->Post("/compare?max_bad_fraction=2e-308", items);
+  ASSERT_TRUE(tiny);
+  EXPECT_EQ(tiny->status, 200) << tiny->body;
+  EXPECT_EQ(json_of(tiny)["match"], false);
+  auto hex = c->Post("/compare?max_bad_fraction=0x1p-2", items);
+  ASSERT_TRUE(hex);
+  EXPECT_EQ(hex->status, 400);
 }
 
 TEST(ServerCompare, SceneAndImageRendersTheReference) {
@@ -1525,6 +1534,11 @@ constexpr const char* kAssignment = R"({"name": "Lab", "profile": "cpsc102", "te
   {"name": "spheres", "scene": "scenes/spheres.txt", "image": "spheres.png", "points": 2},
   {"name": "mirror", "scene": "scenes/mirror.txt", "image": "mirror.png", "points": 3}]})";
 
+std::string read_source(const std::string& path) {
+  std::ifstream in(std::string(RAYFARM_SOURCE_DIR "/") + path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
 std::string lab_file(const std::string& path) {
   std::ifstream in(std::string(RAYFARM_SOURCE_DIR "/scenes/assignments/lab1/") + path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
@@ -1645,6 +1659,59 @@ TEST(ServerGrade, AssignmentErrorsAre400WithTheirPath) {
   EXPECT_EQ(j["tests"][0]["status"], "error");
   auto unknown = c->Post("/grade?spp=2", items);
   EXPECT_EQ(unknown->status, 400);
+  // A syntax error is placed by line and column members, as a scene's is.
+  items = {{"assignment", "{\"name\": \"x\",\n \"tests\": [}", "a.json", "application/json"}};
+  auto syntax = c->Post("/grade", items);
+  ASSERT_TRUE(syntax);
+  EXPECT_EQ(syntax->status, 400);
+  EXPECT_EQ(error_of(syntax)["code"], "invalid_assignment");
+  EXPECT_EQ(error_of(syntax)["line"], 2) << syntax->body;
+  EXPECT_TRUE(error_of(syntax)["column"].is_number()) << syntax->body;
+}
+
+// A scene's texture is the part named by its path from the assignment, however the scene
+// writes it ("../textures/x.ppm" from a scene in scenes/ is "textures/x.ppm").
+TEST(ServerGrade, TexturesArePartsNamedByTheirPathFromTheAssignment) {
+  TestServer server;
+  auto c = server.client();
+  std::string scene = read_source("scenes/textures.txt");
+  for (std::size_t at; (at = scene.find(" textures/")) != std::string::npos;)
+    scene.replace(at, 10, " ../textures/");
+  httplib::MultipartFormDataItems items = {
+      {"assignment", R"({"name": "x", "tests": [{"name": "t", "scene": "scenes/t.txt", "image": "t.png"}]})",
+       "a.json", "application/json"},
+      {"scenes/t.txt", scene, "t.txt", "text/plain"}};
+  for (const char* name : {"bricks", "checker", "slide"})
+    items.push_back({std::string("textures/") + name + ".ppm",
+                     read_source(std::string("scenes/textures/") + name + ".ppm"), "x.ppm", ""});
+  auto r = c->Post("/grade?format=json", items);
+  ASSERT_TRUE(r);
+  ASSERT_EQ(r->status, 200) << r->body;
+  const Json j = Json::parse(r->body);
+  EXPECT_FALSE(j.contains("error") && !j["error"].is_null() && j["error"] != "") << r->body;
+  EXPECT_EQ(j["tests"][0]["status"], "failed") << r->body;  // graded: the image is missing
+  // A path that climbs out of the assignment is refused, whatever parts there are.
+  scene = read_source("scenes/textures.txt");
+  for (std::size_t at; (at = scene.find(" textures/")) != std::string::npos;)
+    scene.replace(at, 10, " ../../textures/");
+  items[1].content = scene;
+  const Json out = Json::parse(c->Post("/grade?format=json", items)->body);
+  EXPECT_NE(out["error"].get<std::string>().find("outside the assignment's folder"),
+            std::string::npos) << out;
+}
+
+// A part without a name is no part of any route's: the body is refused as malformed.
+TEST(ServerGrade, APartWithoutANameIsABadBody) {
+  TestServer server;
+  for (const char* route : {"/grade", "/compare", "/render", "/check"}) {
+    auto c = server.client();
+    httplib::MultipartFormDataItems items = {{"a", "x", "a.ppm", ""}, {"", "xx", "", ""}};
+    auto r = c->Post(route, items);
+    ASSERT_TRUE(r) << route;
+    EXPECT_EQ(r->status, 400) << route;
+    EXPECT_EQ(error_of(r)["code"], "bad_multipart") << route << r->body;
+    EXPECT_EQ(r->get_header_value("Connection"), "close") << route;
+  }
 }
 
 TEST(ServerRender, ASceneSentTwiceIsRefused) {

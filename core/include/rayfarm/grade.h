@@ -3,6 +3,7 @@
 // result files of the grading platforms (docs/grading.md).
 #pragma once
 
+#include <algorithm>
 #include <functional>
 #include <map>
 #include <memory>
@@ -135,7 +136,14 @@ struct GradeResult {
   double max_score = 0;
   std::string error;  // the grader itself failed (e.g. the lock does not match): score 0
 
-  double fraction() const { return max_score > 0 ? score / max_score : 0; }
+  // Of the points to be had; where none are, 1 when every test passed.
+  double fraction() const {
+    if (max_score > 0) return score / max_score;
+    return !tests.empty() && std::all_of(tests.begin(), tests.end(),
+                                         [](const TestResult& t) { return t.status == "passed"; })
+               ? 1
+               : 0;
+  }
 };
 
 struct GradeSettings {

@@ -160,7 +160,7 @@ class Reader {
     if (o.contains("neighborhood")) {
       const Json& n = o["neighborhood"];
       if (n.is_boolean()) t.neighborhood = n.get<bool>();
-      else if (n.is_number_integer() && (n.get<int>() == 0 || n.get<int>() == 1)) t.neighborhood = n.get<int>() == 1;
+      else if (n.is_number_integer() && (n == 0 || n == 1)) t.neighborhood = n == 1;
       else error(path + "/neighborhood", "must be 0 or 1");
     }
     if (o.contains("max_bad_fraction"))
@@ -260,7 +260,9 @@ std::optional<Assignment> parse_assignment(std::string_view text, Diagnostics& d
     } else if (!t.scene.empty()) {
       t.image = stem_of(t.scene) + ".ppm";
     }
-    if (o.contains("points")) t.points = r.number(o["points"], path + "/points", 0, 1e6).value_or(0);
+    // Kept to 1/10000 of a point, as scores are: full marks are then the points exactly.
+    if (o.contains("points"))
+      t.points = std::round(r.number(o["points"], path + "/points", 0, 1e6).value_or(0) * 10000) / 10000;
     if (o.contains("problem")) t.problem = r.string(o["problem"], path + "/problem").value_or("");
     if (t.problem.empty()) t.problem = t.name;
     TestSpec scratch = t;

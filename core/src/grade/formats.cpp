@@ -8,6 +8,7 @@
 #include "rayfarm/grade.h"
 #include "rayfarm/image_io.h"
 #include "rayfarm/render.h"
+#include "grade/numbers.h"
 #include "util/utf8.h"
 
 namespace rayfarm::grading {
@@ -124,8 +125,8 @@ std::string metrics_line(const TestResult& t) {
   if (!t.metrics) return "";
   const CompareResult& m = *t.metrics;
   return "differing pixels " + std::to_string(m.differing_pixels) + " (" +
-         fixed(100 * m.differing_fraction, 3) + "%), mean difference " + fixed(m.mean_abs) +
-         ", RMSE " + fixed(m.rmse) + ", largest " + std::to_string(m.max_abs) + ", PSNR " +
+         percent(m.differing_fraction) + "), mean difference " + num(m.mean_abs) + ", RMSE " +
+         num(m.rmse) + ", largest " + std::to_string(m.max_abs) + ", PSNR " +
          (std::isinf(m.psnr) ? std::string("inf") : fixed(m.psnr, 2) + " dB");
 }
 
@@ -401,11 +402,13 @@ std::string write_result(const GradeResult& result, Format format) {
   switch (format) {
     case Format::gradescope: return gradescope(result);
     case Format::prairielearn: return prairielearn(result);
-    case Format::autolab: return autolab(result);
+    // The two plain-text reports quote file names of the student's folder, which may be any
+    // bytes: a report must be UTF-8 throughout (the JSON and XML writers see to their own).
+    case Format::autolab: return printable_text(autolab(result));
     case Format::junit: return junit(result);
     case Format::json: return json(result);
     case Format::html: return html(result);
-    case Format::md: return markdown(result);
+    case Format::md: return printable_text(markdown(result));
   }
   return json(result);
 }

@@ -9,6 +9,7 @@
 #include "rayfarm/content_key.h"
 #include "rayfarm/render.h"
 #include "rayfarm/sha256.h"
+#include "grade/numbers.h"
 
 namespace rayfarm::grading {
 namespace {
@@ -18,18 +19,6 @@ double metric_value(const CompareResult& m, const std::string& metric) {
   if (metric == "rmse") return m.rmse;
   if (metric == "max_abs") return m.max_abs;
   return m.differing_fraction;
-}
-
-std::string percent(double f) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, f > 0 && f < 0.0001 ? "%.4f%%" : "%.2f%%", 100 * f);
-  return buf;
-}
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", v);
-  return buf;
 }
 
 // The fraction of the points the credit rule gives.
@@ -192,11 +181,13 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
       continue;
     }
     r.metrics = m;
+    const bool all_or_nothing = t.credit.kind == CreditRule::Kind::all;
     const bool passed = m->differing_fraction <= t.max_bad_fraction;
-    r.score = t.points * credit_fraction(t, *m, passed);
-    // Scores to a hundredth of a point (0.1 + 0.2 must sum as a platform shows it).
-    r.score = std::round(r.score * 10000) / 10000;
-    r.status = r.score >= t.points && passed ? "passed" : "failed";
+    const double credit = credit_fraction(t, *m, passed);
+    // Scores to 1/10000 of a point, as the points are (0.1 + 0.2 must sum as a platform shows
+    // it). With a scale of credit the test passes when it earns its full points.
+    r.score = std::round(t.points * credit * 10000) / 10000;
+    r.status = (all_or_nothing ? passed : credit >= 1) ? "passed" : "failed";
     if (m->max_abs == 0) {
       r.message = "identical to the reference";
     } else {
@@ -206,8 +197,9 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
                   (t.threshold == 1 ? " level" : " levels") +
                   (t.neighborhood ? " (3x3 neighbourhood)" : "") + " (" +
                   percent(m->differing_fraction) +
-                  (t.max_bad_fraction > 0 ? "; up to " + percent(t.max_bad_fraction) + " may"
-                                          : "; none may") +
+                  (!all_or_nothing            ? ""
+                   : t.max_bad_fraction > 0 ? "; up to " + percent(t.max_bad_fraction) + " may"
+                                            : "; none may") +
                   "); mean difference " + num(m->mean_abs) + ", largest " +
                   std::to_string(m->max_abs);
       r.diff = diff_image(ref, mine, copts);
@@ -228,6 +220,7 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
     out.tests.push_back(std::move(r));
   }
   out.score = std::round(out.score * 10000) / 10000;
+  out.max_score = std::round(out.max_score * 10000) / 10000;
   for (const TestResult& t : out.tests)
     if (t.status == "error") {
       set_grader_error(out, "test '" + t.name + "': " + t.message);
@@ -257,12 +250,19 @@ std::vector<std::string> check_lock(const GradeResult& result, const nlohmann::j
       continue;
     }
     const nlohmann::json& l = tests[t.name];
-    const std::string want = l.value("reference_sha256", "");
-    if (t.reference_sha256.empty())
+    // A lock edited by hand may hold anything: what is not a string matches nothing.
+    auto text = [&](const char* key) {
+      return l.is_object() && l.contains(key) && l[key].is_string() ? l[key].get<std::string>()
+                                                                    : std::string();
+    };
+    const std::string want = text("reference_sha256");
+    if (!l.is_object() || !l.contains("reference_sha256") || !l["reference_sha256"].is_string())
+      problems.push_back("test '" + t.name + "': the lock's entry has no reference_sha256 string");
+    else if (t.reference_sha256.empty())
       problems.push_back("test '" + t.name + "': no reference to check (" + t.message + ")");
     else if (t.reference_sha256 != want)
       problems.push_back("test '" + t.name + "': the reference image is not the locked one (" +
-                         (l.value("reference_key", "") == t.reference_key
+                         (text("reference_key") == t.reference_key
                               ? std::string("same scene and options, another rendering")
                               : std::string("the scene, its options or rayfarm changed")) +
                          ")");

@@ -51,13 +51,26 @@ DecodedPng decode_png_rgb(const unsigned char* data, int size, std::size_t alloc
 
   DecodedPng result;
   int channels = 0;
-  std::unique_ptr<stbi_uc, FreeDeleter> pixels(
-      stbi_load_from_memory(data, size, &result.width, &result.height, &channels, 3));
-  if (!pixels) {
+  auto failed = [&result] {
     const char* reason = stbi_failure_reason();
     result.error = reason ? reason : "corrupt data";
     return result;
+  };
+  // 16-bit samples are scaled to 8 bits to the nearest level, as a PPM's are (stb itself keeps
+  // the high byte): one picture graded in either format gets the same bytes.
+  if (stbi_is_16_bit_from_memory(data, size)) {
+    std::unique_ptr<stbi_us, FreeDeleter> wide(
+        stbi_load_16_from_memory(data, size, &result.width, &result.height, &channels, 3));
+    if (!wide) return failed();
+    const std::size_t n = static_cast<std::size_t>(result.width) * result.height * 3;
+    result.rgb.resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+      result.rgb[i] = static_cast<std::uint8_t>((wide.get()[i] * 255u + 32767u) / 65535u);
+    return result;
   }
+  std::unique_ptr<stbi_uc, FreeDeleter> pixels(
+      stbi_load_from_memory(data, size, &result.width, &result.height, &channels, 3));
+  if (!pixels) return failed();
   auto* begin = pixels.get();
   result.rgb.assign(begin, begin + static_cast<std::size_t>(result.width) * result.height * 3);
   return result;
