@@ -206,9 +206,14 @@ std::optional<std::string> FileResolver::read(const std::string& path, std::stri
     error = file.string() + " is a directory";
     return std::nullopt;
   }
-  // Opening a pipe waits for a writer, for ever if none comes: a texture is a file.
+  // Opening a pipe waits for a writer, for ever if none comes, and a device (/dev/zero) reads
+  // a gigabyte before its bytes are seen to be no image: a texture is a file.
   if (std::filesystem::is_fifo(file, ec) || std::filesystem::is_socket(file, ec)) {
     error = file.string() + " is a pipe, not a file";
+    return std::nullopt;
+  }
+  if (std::filesystem::is_character_file(file, ec) || std::filesystem::is_block_file(file, ec)) {
+    error = file.string() + " is a device, not a file";
     return std::nullopt;
   }
   std::ifstream in(file, std::ios::binary);

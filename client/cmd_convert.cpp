@@ -7,6 +7,7 @@
 
 #include "cli_common.h"
 #include "commands.h"
+#include "rayfarm/render.h"
 #include "rayfarm/writers.h"
 
 namespace rayfarm::cli {
@@ -47,8 +48,19 @@ Runner add_convert(CLI::App& app) {
     auto checked_options = [&]() -> std::optional<RenderOptions> {
       auto options = resolve_options(*loaded->scene, args->flags);
       if (!options) return std::nullopt;
-      if (!loaded->scene->find_camera(options->camera)) {
+      const auto camera = loaded->scene->find_camera(options->camera);
+      if (!camera) {
         std::cerr << "rayfarm: error: no camera named '" << options->camera << "'\n";
+        return std::nullopt;
+      }
+      // A size the scene's own camera gives is lint's to report; options given here that
+      // make the image too large would be written into a JSON scene that no render takes.
+      const Camera& cam = loaded->scene->cameras[*camera];
+      const std::string size =
+          image_size_error(options->width > 0 ? options->width : cam.width,
+                           options->height > 0 ? options->height : cam.height, options->spp);
+      if (args->to == "json" && !args->flags.values.empty() && !size.empty()) {
+        std::cerr << "rayfarm: error: with the options given, " << size << "\n";
         return std::nullopt;
       }
       return options;

@@ -5,6 +5,7 @@
 #include "cli_common.h"
 #include "commands.h"
 #include "rayfarm/explain.h"
+#include "rayfarm/lint.h"
 
 namespace rayfarm::cli {
 namespace {
@@ -55,6 +56,14 @@ Runner add_trace(CLI::App& app) {
     if (!loaded) return kBadInput;
     auto options = resolve_options(*loaded->scene, args->flags);
     if (!options) return kBadInput;
+    {
+      // An image render refuses for its size is refused here as there, with its place.
+      Diagnostics lints;
+      lint_image_size(*loaded->scene, *options, lints);
+      for (const Diagnostic& d : lints.items())
+        std::cerr << format_diagnostic(d, display_name(args->scene), *text);
+      if (lints.has_errors()) return kBadInput;
+    }
     std::string error;
     const auto explainer = Explainer::create(*loaded->scene, *options, &error);
     if (!explainer) {

@@ -359,6 +359,11 @@ TEST(ConvertCli, RenderFlagsGoIntoJsonAndAreRefusedForModelFiles) {
   EXPECT_EQ(j["render"]["spp"], 8);
   EXPECT_EQ(j["render"]["profile"], "cpsc102");
   EXPECT_EQ(run(kRayfarm + " convert " + scene + " --to model --spp 8").code, 2);
+  // Options that make an image no render takes are not written into the scene.
+  Outcome big = run(kRayfarm + " convert " + scene + " --to json --width 65535 --height 65535 2>&1");
+  EXPECT_EQ(big.code, 2);
+  EXPECT_NE(big.out.find("with the options given, the image has 4294836225 pixels"),
+            std::string::npos) << big.out;
 }
 
 TEST(RenderCli, RefusesOutputsAndServersItCannotUse) {
@@ -474,9 +479,9 @@ TEST(RenderCli, OutputsGoWhereTheyPoint) {
 // error of the scene at its place: `render /dev/zero` once filled memory until the program
 // aborted. (tests/read_file_test.cpp holds the limit's edge.) Memory is capped for the runs, so
 // that a regression fails here rather than filling the machine.
-// A texture that is a pipe would be opened for ever (no writer comes): it is refused at its
-// place, at once.
-TEST(RenderCli, APipeIsNoTexture) {
+// A texture that is a pipe would be opened for ever (no writer comes), a device read to the
+// limit: each is refused at its place, at once.
+TEST(RenderCli, APipeOrADeviceIsNoTexture) {
   REQUIRE_CLIENT();
   const fs::path dir = fs::temp_directory_path() / ("rayfarm-fifo-" + std::to_string(getpid()));
   fs::remove_all(dir);
@@ -493,6 +498,16 @@ TEST(RenderCli, APipeIsNoTexture) {
   EXPECT_EQ(r.code, 1) << r.out;
   EXPECT_NE(r.out.find("pipe.ppm is a pipe, not a file"), std::string::npos) << r.out;
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(10));
+  // A device is refused before it is read (/dev/zero took 5 s and 1.6 GB to be "too large").
+  std::ofstream(dir / "device.txt")
+      << "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n"
+         "material m { diffuse 1 1 1 }\n"
+         "texture t { filename /dev/zero }\n"
+         "texplane w { material m normal 0 0 1 point 0 0 -5 xdir 1 0 0 dimensions 8 6 "
+         "texname t mode 0 }\n";
+  Outcome device = run(kRayfarm + " check " + q((dir / "device.txt").string()) + " 2>&1");
+  EXPECT_EQ(device.code, 1) << device.out;
+  EXPECT_NE(device.out.find("/dev/zero is a device, not a file"), std::string::npos) << device.out;
   fs::remove_all(dir);
 }
 
@@ -587,6 +602,17 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
   usage("trace " + scene + " 1 4294967296",
         "y: '4294967296' is past every image: images are at most 65535 pixels wide or high");
   usage("convert " + scene + " --to json --camera nosuch", "error: no camera named 'nosuch'");
+  // An image too large for render is refused by trace too, as render says it (with the
+  // place in the file where the file gives the size).
+  for (const std::string& command : {std::string(" render "), std::string(" trace ")}) {
+    Outcome r = run(kRayfarm + command + scene + " --width 65535 --height 65535" +
+                    (command == " trace " ? " 1 1" : " -o /dev/null") + " 2>&1");
+    EXPECT_EQ(r.code, 2) << command << r.out;
+    EXPECT_NE(r.out.find("minimal.txt: error: with the width and height asked for, the image "
+                         "has 4294836225 pixels"),
+              std::string::npos)
+        << command << r.out;
+  }
   usage("convert " + scene + " --to pov --spp 8",
         "--to pov cannot use --spp: the POV-Ray file takes --camera, --width, --height, "
         "--max-depth, --profile, --background and --highlight");

@@ -562,6 +562,20 @@ TEST(Lint, AnImageTooLargeToRenderIsAnErrorAtItsCamera) {
   sampled.spp = 4;
   ASSERT_EQ(codes(errors_of(big, sampled)), std::vector<std::string>{"image-too-large"});
   EXPECT_TRUE(contains(errors_of(big, sampled)[0].message, "with spp > 1"));
+  // Every camera is rendered with --camera: one too large at its own size is an error at it,
+  // whichever camera is the default; a size asked for is one error, not one per camera.
+  const std::string two = "material m { ambient 1 }\n"
+                          "camera a { pixeldim 64 48 worlddim 8 6 viewpoint 4 3 5 }\n"
+                          "camera b { pixeldim 65535 65535 worlddim 8 6 viewpoint 4 3 5 }\n"
+                          "sphere s { material m center 4 3 -5 radius 1 }\n";
+  const auto second = errors_of(two, {});
+  ASSERT_EQ(codes(second), std::vector<std::string>{"image-too-large"});
+  EXPECT_EQ(second[0].where.line, 3);
+  EXPECT_TRUE(contains(second[0].message, "camera 'b'")) << second[0].message;
+  EXPECT_TRUE(errors_of(two, small).empty());
+  RenderOptions huge_size;
+  huge_size.width = huge_size.height = 65535;
+  EXPECT_EQ(errors_of(two, huge_size).size(), 1u);
 
   // A JSON scene's render block that asks for the size is where the error points.
   const std::string json = R"({"camera": {"pixeldim": [40, 30], "worlddim": [8, 6],

@@ -563,6 +563,11 @@ TEST(JsonScene, ReportsBadRenderOptionsAtTheirPath) {
        "precision float is not available in the cpsc102 profile"},
       {R"("profile": "cpsc102", "seed": 4294967296)", "bad-option", "/render/seed",
        "seed must be below 2^32"},
+      // Its samples come in one pass: a limit between passes would never stop it.
+      {R"("profile": "cpsc102", "spp": 64, "time_limit": 0.5)", "bad-option", "/render/time_limit",
+       "time_limit is not available in the cpsc102 profile"},
+      {R"("profile": "cpsc102", "target_error": 2)", "bad-option", "/render/target_error",
+       "target_error is not available in the cpsc102 profile"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.render);

@@ -569,6 +569,28 @@ TEST(ModelParser, AMaterialNamedLikeAnAttributeIsAName) {
                       "'material' needs a material name"));
 }
 
+// "nan" and "inf" are names where a material is named, as they are where one is defined (a
+// JSON scene's model file must read back); a number is not.
+TEST(ModelParser, AMaterialNamedNanOrInfIsAName) {
+  for (const bool fast : {false, true}) {
+    SCOPED_TRACE(fast ? "the fast loader" : "the described scene");
+    const std::string text = with_head(
+        "material nan { ambient 1 }\nmaterial Infinity { ambient .5 }\n"
+        "sphere s { material nan center 0 0 -5 radius 1 }\n"
+        "tiled_plane p { material Infinity altmaterial nan normal 0 1 0 point 0 0 0 xdir 1 0 0 "
+        "dimensions 1 1 }\n");
+    LoadedScene loaded = load_scene(text, fast ? LoadDetail::scene : LoadDetail::full);
+    ASSERT_TRUE(loaded.scene) << dump(loaded.diags);
+    const Scene& scene = *loaded.scene;
+    ASSERT_EQ(scene.objects.size(), 2u);
+    EXPECT_EQ(scene.materials[scene.objects[0].material].name, "nan");
+    EXPECT_EQ(scene.materials[scene.objects[1].material].name, "Infinity");
+  }
+  const std::string line = "sphere s { material 2 center 0 0 -5 radius 1 }";
+  EXPECT_TRUE(is_diag(single_error(line + "\n"), "missing-value", 3, column_of(line, "2"),
+                      "'material' needs a material name"));
+}
+
 // A character that looks like a space or like nothing (pasted from a document) is named, and
 // the keyword it spoils is not also "missing": one error for one mistake.
 TEST(ModelParser, NamesAnInvisibleCharacterInAKeyword) {

@@ -67,6 +67,20 @@ void lint_image_size(const Scene& scene, const RenderOptions& options, Diagnosti
     lint_size(scene, scene.cameras[*cam_index], options, diags);
 }
 
+namespace {
+
+// The other cameras at their own sizes: each is rendered with --camera, and one too large for
+// that is an error of the file, at that camera (a size the options give is said once, above).
+void lint_other_cameras(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
+  if (options.width > 0 || options.height > 0) return;
+  const auto chosen = scene.find_camera(options.camera);
+  for (std::size_t i = 0; i < scene.cameras.size(); ++i)
+    if (!chosen || i != static_cast<std::size_t>(*chosen))
+      lint_size(scene, scene.cameras[i], options, diags);
+}
+
+}  // namespace
+
 void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
   auto cam_index = scene.find_camera(options.camera);
   if (!cam_index) {
@@ -75,6 +89,7 @@ void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& d
   }
   const Camera& cam = scene.cameras[*cam_index];
   lint_size(scene, cam, options, diags);
+  lint_other_cameras(scene, options, diags);
   glm::dvec3 eye = cam.viewpoint;
   glm::dvec3 centre{cam.world_width / 2, cam.world_height / 2, 0};
   glm::dvec3 view = centre - eye;

@@ -175,7 +175,7 @@ class FastLoader {
       values.seen[k] = true;
       if (attr->kind == ValueKind::material_ref) {
         const Token v = lex_.next();
-        if (v.kind != Token::word || looks_like_value(v.text) || find_attr(spec, v.text) ||
+        if (v.kind != Token::word || starts_like_number(v.text) || find_attr(spec, v.text) ||
             find_entity(v.text) || !is_valid_name(v.text))
           return false;
         values.material = v.text;

@@ -308,12 +308,14 @@ class ModelParser {
         next_attribute = is_word_kind(next->kind) ? !find_attr(spec, after) && !find_entity(after)
                                                   : looks_like_value(after);
       }
-      if (v.kind != Token::word || (material && looks_like_value(v.text)) || next_attribute ||
+      // A number is no material name; "nan" and "inf" are names, as a material's own
+      // name may be.
+      if (v.kind != Token::word || (material && starts_like_number(v.text)) || next_attribute ||
           (find_entity(v.text) && starts_entity(1))) {
         diags_.error("missing-value",
                      "'" + a.key + "' needs " + (material ? "a material name" : describe(attr)),
                      at(v));
-        if (v.kind == Token::word && material && looks_like_value(v.text)) lex_.next();
+        if (v.kind == Token::word && material && starts_like_number(v.text)) lex_.next();
         if (!duplicate) e.invalid_keys.push_back(a.key);
         return;
       }

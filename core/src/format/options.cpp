@@ -283,6 +283,16 @@ std::string profile_conflict(const RenderOptions& o, std::string* option) {
               "highlight blinn is not available in the cpsc102 profile (its glint is the course "
               "program's own)");
   if (o.bailout > 0) return at("bailout", "bailout is not available in the cpsc102 profile");
+  // Its samples come in one pass, in the course program's order (its random() stream runs
+  // through the pixels): there is no pass to stop after, so these limits could never act.
+  if (o.time_limit > 0)
+    return at("time_limit",
+              "time_limit is not available in the cpsc102 profile (it takes every sample in "
+              "one pass, in the course program's order; lower spp instead)");
+  if (o.target_error > 0)
+    return at("target_error",
+              "target_error is not available in the cpsc102 profile (it takes every sample in "
+              "one pass, in the course program's order; lower spp instead)");
   if (o.seed > 0xffffffffULL)
     return at("seed", "seed must be below 2^32 in the cpsc102 profile (it seeds glibc's random())");
   if (o.effective_max_depth() > kCpsc102MaxDepth)
