@@ -381,6 +381,23 @@ TEST(Hints, TruncatingWhereTheReferenceRounds) {
   EXPECT_EQ(codes(grade_one(mine, "", "lecture")), std::vector<std::string>{"truncation"});
 }
 
+// One channel one level off is no rounding convention (that would move many channels): the
+// hint says a difference of one level and names no cause.
+TEST(Hints, OneChannelOneLevelOffIsNoConvention) {
+  const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
+  Image mine = ref;
+  std::size_t at = 0;
+  while (mine.rgb[at] == 255) ++at;
+  ++mine.rgb[at];
+  EXPECT_EQ(codes(grade_one(mine)), std::vector<std::string>{"off_by_one"});
+  const Image lecture = render_with(kScene, {});
+  Image dark = lecture;
+  at = 0;
+  while (dark.rgb[at] == 0) ++at;
+  --dark.rgb[at];
+  EXPECT_EQ(codes(grade_one(dark, "", "lecture")), std::vector<std::string>{"off_by_one"});
+}
+
 TEST(Hints, UpsideDownMirroredAndSwappedChannels) {
   const Image ref = render_with(kScene, {{"profile", "cpsc102"}});
   Image flipped(ref.width, ref.height), mirrored(ref.width, ref.height), bgr = ref;

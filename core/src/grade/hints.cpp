@@ -135,19 +135,29 @@ std::optional<Hint> rounding_hint(const Image& ref, const Image& mine, const Ren
                     "order of operations) near the edge between two byte values"};
   RenderOptions flipped = options;
   flipped.rounding = truncates ? Rounding::nearest : Rounding::truncate;
-  bool exact = false;
+  bool exact = false, plausible = true;
   if (profile_conflict(flipped).empty())
-    if (auto alt = alternative(flipped)) exact = *alt == mine;
+    if (auto alt = alternative(flipped)) {
+      exact = *alt == mine;
+      // The other convention moves many channels; a student's image that shares few of those
+      // moves (one channel of one pixel) is not explained by it.
+      long long moved = 0, shared = 0;
+      for (size_t i = 0; i < ref.rgb.size(); ++i) {
+        moved += alt->rgb[i] != ref.rgb[i];
+        shared += alt->rgb[i] != ref.rgb[i] && mine.rgb[i] == alt->rgb[i];
+      }
+      plausible = exact || 10 * shared >= 9 * moved;
+    }
   const std::string confirmed = exact ? std::string(" Your image is exactly the reference made with "
                                                     "rounding=") +
                                             (truncates ? "nearest." : "truncate.")
                                       : "";
-  if (up > 0 && truncates)
+  if (up > 0 && truncates && plausible)
     return Hint{"rounding",
                 "every difference is one level too bright (" + n +
                     " channels): you round to the nearest byte, (int)(255 * c + 0.5), where the "
                     "reference truncates, (int)(255 * c)." + confirmed};
-  if (down > 0 && !truncates)
+  if (down > 0 && !truncates && plausible)
     return Hint{"truncation",
                 "every difference is one level too dark (" + n +
                     " channels): you truncate, (int)(255 * c), where the reference rounds to the "
