@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -28,7 +29,9 @@ struct Job {
   std::shared_ptr<RenderJob> render;
   std::string error;       // the render threw, or the scene could not be prepared
   std::string error_code;
-  std::chrono::steady_clock::time_point run_start{};
+  // What its tiles took of the render threads, summed (--job-timeout weighs it over their
+  // number): a job sharing them with others is not timed out for their load.
+  std::atomic<std::int64_t> render_ns{0};
   std::atomic<bool> cancel_requested{false};  // by its client (not by a shutdown)
   std::atomic<bool> timed_out{false};
 };

@@ -138,7 +138,6 @@ void Scheduler::prepare(const std::shared_ptr<Job>& job) {
   {
     std::lock_guard jl(job->mu);
     job->render = render;
-    job->run_start = std::chrono::steady_clock::now();
   }
   // A cancel or a shutdown that came while the scene was being prepared.
   if (!hooks_.started(*job, render->stats()) || job->cancel_requested || interrupt_.load())
@@ -166,8 +165,9 @@ void Scheduler::remove_and_finish(const std::shared_ptr<Job>& job, RenderJob* re
 }
 
 void Scheduler::after_tile(const std::shared_ptr<Job>& job, RenderJob& render) {
-  if (job_timeout_s_ > 0 && std::chrono::steady_clock::now() - job->run_start >
-                                std::chrono::duration<double>(job_timeout_s_)) {
+  // The job's own time: its tiles' time over the threads, what it takes alone on this node.
+  const double own_s = 1e-9 * static_cast<double>(job->render_ns.load()) / workers();
+  if (job_timeout_s_ > 0 && own_s > job_timeout_s_) {
     job->timed_out = true;
     render.cancel();
   }
@@ -198,8 +198,12 @@ void Scheduler::work() {
     // Another worker finished the job between pick() and here (the render is dropped then).
     if (!render) continue;
     RenderJob::Step step;
+    const auto tile_start = std::chrono::steady_clock::now();
     try {
       step = render->run_step();
+      p->job->render_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(
+                               std::chrono::steady_clock::now() - tile_start)
+                               .count();
     } catch (const std::exception& e) {
       {
         std::lock_guard jl(p->job->mu);

@@ -2634,6 +2634,41 @@ TEST(ServerJobs, AFailedJobsImageIsItsError) {
   EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["limit"], "job_timeout") << r->body;
 }
 
+// --job-timeout weighs a job's own time on the render threads, not the wall clock: four jobs
+// that share one thread each take about four times as long to finish as alone, and none is
+// timed out for the others' load. (The limit is 2.5 times a job's time alone, measured here
+// first, so the check holds on a slow or a sanitized build alike.)
+TEST(ServerJobs, AJobIsNotTimedOutForTheOthersLoad) {
+  const std::string q = "width=160&height=120&spp=48&seed=";
+  double alone_ms = 0;
+  {
+    Settings s = test_settings();
+    s.workers = 1;
+    TestServer server(s);
+    auto c = server.client();
+    for (int i = 0; i < 2; ++i) {
+      const Json st = wait_final(*c, submit(*c, q + std::to_string(i)));
+      ASSERT_EQ(st["state"], "done") << st.dump();
+      alone_ms = std::max(alone_ms, st["stats"]["render_ms"].get<double>());
+    }
+  }
+  Settings s = test_settings();
+  s.workers = 1;
+  s.job_timeout = 2.5 * alone_ms / 1000;
+  TestServer server(s);
+  auto c = server.client();
+  std::vector<std::string> ids;
+  for (int i = 0; i < 4; ++i) ids.push_back(submit(*c, q + std::to_string(10 + i)));
+  double longest_ms = 0;
+  for (const std::string& id : ids) {
+    const Json st = wait_final(*c, id);
+    EXPECT_EQ(st["state"], "done") << st.dump();
+    longest_ms = std::max(longest_ms, st.value("elapsed_ms", 0.0));
+  }
+  // They did share the thread: the last took longer on the clock than the limit allows one.
+  EXPECT_GT(longest_ms, 1000 * s.job_timeout) << "alone " << alone_ms << " ms";
+}
+
 TEST(ServerHardening, OversizedBodyIsRefusedBeforeA100Continue) {
   Settings s = test_settings();
   s.max_body_bytes = 64 * 1024;
