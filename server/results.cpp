@@ -4,6 +4,12 @@
 #include "service.h"
 
 namespace rayfarm::server {
+namespace {
+
+// The cache's key of a stopped job's partial image: no image name has a '#'.
+std::string partial_key(const std::string& image_name) { return image_name + "#partial"; }
+
+}  // namespace
 
 bool Service::on_started(Job& job, const RenderStats& stats) {
   auto rec = jobs_->transition(job.id, {JobState::queued}, [&](JobRecord& r) {
@@ -56,6 +62,17 @@ void Service::on_finished(Job& job, RenderJob* render) {
     return;
   }
   std::shared_ptr<const std::string> png;
+  // What a job stopped part way had rendered stays for ?partial=1, in memory only (the
+  // image cache's budget bounds it; a restart forgets it).
+  if (render && (state == JobState::canceled || state == JobState::failed) &&
+      st.progress() > 0) {
+    try {
+      auto bytes = encode_png(render->image());
+      cache_.put(partial_key(before ? before->image_name : job.id),
+                 std::make_shared<const std::string>(bytes.begin(), bytes.end()));
+    } catch (const std::exception&) {
+    }  // (out of memory: the partial image is black, as it was)
+  }
   if (state == JobState::done) {
     try {
       auto bytes = encode_png(render->image());
@@ -111,6 +128,11 @@ std::optional<Image> Service::current_image(const JobRecord& job) {
     std::string error;
     return decode_image(*png, &error);
   }
+  if (job.state == JobState::canceled || job.state == JobState::failed)
+    if (auto png = cache_.get(partial_key(job.image_name))) {
+      std::string error;
+      if (auto image = decode_image(*png, &error)) return image;
+    }
   return Image(job.width, job.height);  // not started, or ended without an image: black
 }
 

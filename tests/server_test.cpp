@@ -698,10 +698,20 @@ TEST(ServerJobs, ImageIs409WhileRunningAndPartialShowsProgress) {
   auto ppm = c->Get("/jobs/" + id + "/image?partial=1&format=ppm");
   ASSERT_TRUE(ppm);
   EXPECT_EQ(ppm->body.substr(0, 2), "P6");
+  // Some tiles rendered, then canceled: the partial image keeps them (it was all black).
+  wait_for(*c, id, [](const Json& s) { return s["progress"].get<double>() > 0.05; });
   auto del = c->Delete("/jobs/" + id);
   ASSERT_TRUE(del);
   ASSERT_EQ(del->status, 200);
   EXPECT_EQ(json_of(del)["state"], "canceled");  // the state after the cancel
+  const Json final_status = wait_final(*c, id);
+  ASSERT_EQ(final_status["state"], "canceled");
+  auto kept = c->Get("/jobs/" + id + "/image?partial=1");
+  ASSERT_TRUE(kept);
+  ASSERT_EQ(kept->status, 200);
+  EXPECT_EQ(kept->get_header_value("X-Job-State"), "canceled");
+  const Image so_far = decode_or_fail(kept->body);
+  EXPECT_TRUE(std::any_of(so_far.rgb.begin(), so_far.rgb.end(), [](std::uint8_t v) { return v > 0; }));
 }
 
 TEST(ServerJobs, DoneImageIsPngOrPpmAndRevalidates) {
