@@ -47,8 +47,12 @@ void Service::restore() {
       fail(JobState::failed, "lost", "the job's scene could not be read back after a restart");
       continue;
     }
-    jobs_->transition(r.id, {JobState::queued, JobState::running},
-                      [](JobRecord& x) { x.state = JobState::queued; });
+    // Queued again, to run from the start: no progress or start of the render it lost.
+    jobs_->transition(r.id, {JobState::queued, JobState::running}, [](JobRecord& x) {
+      x.state = JobState::queued;
+      x.started_ms = 0;
+      x.stats = RenderStats{};
+    });
     {
       std::lock_guard lock(mu_);
       for (const std::string& t : r.textures) ++texture_refs_[t];

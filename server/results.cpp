@@ -53,11 +53,13 @@ void Service::on_finished(Job& job, RenderJob* render) {
     state = JobState::done;
   }
   if (state == JobState::queued) {
-    // Interrupted by a shutdown: it stays queued on disk and runs again after a restart.
+    // Interrupted by a shutdown: it stays queued on disk and runs again after a restart, from
+    // the start, so it shows no progress, start or stop of the render that was cut short.
     jobs_->transition(job.id, {JobState::running}, [&](JobRecord& r) {
       r.state = JobState::queued;
       r.attempts = std::max(0, r.attempts - 1);
-      r.stats = st;
+      r.started_ms = 0;
+      r.stats = RenderStats{};
     });
     return;
   }

@@ -1168,7 +1168,18 @@ TEST(ServerRestart, InterruptedJobRunsAgainAfterARestart) {
     auto c = server.client("alice");
     id = submit(*c, q);
     ASSERT_EQ(wait_running(*c, id)["state"], "running");
+    wait_for(*c, id, [](const Json& st) { return st["progress"].get<double>() > 0; });
     server.stop();  // grace 0: the render is interrupted
+  }
+  {
+    // Kept queued, to run from the start: nothing of the render that was cut short shows.
+    std::ifstream in(dir.path / "jobs" / (id + ".json"));
+    const Json kept = Json::parse(in, nullptr, false);
+    ASSERT_FALSE(kept.is_discarded());
+    EXPECT_EQ(kept["state"], "queued") << kept.dump();
+    EXPECT_EQ(kept["started_ms"], 0) << kept.dump();
+    EXPECT_EQ(kept["stats"].value("spp_done", 0) + kept["stats"].value("tiles_done", 0), 0)
+        << kept.dump();
   }
   TestServer server(s);
   auto c = server.client("alice");
