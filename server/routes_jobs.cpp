@@ -21,6 +21,7 @@ struct StreamState {
   Slot slot;  // held while the stream is open
   std::string id;
   std::uint64_t sent_version = 0;  // none sent yet: a record's version is at least 1
+  nlohmann::json sent_position;    // the queue position last sent: it moves without a version
   Clock::time_point last_sent{};
 };
 
@@ -40,15 +41,17 @@ bool send_next_event(Service& svc, StreamState& state, httplib::DataSink& sink) 
     return true;
   }
   std::string event;
+  const nlohmann::json status = svc.status(*job);
+  const nlohmann::json position = status.value("queue_position", nlohmann::json());
   if (is_final(js)) {
-    event = "event: " + std::string(to_string(js)) + "\ndata: " +
-            json_text(svc.status(*job)) + "\n\n";
-  } else if (version != state.sent_version) {
-    event = "event: progress\ndata: " + json_text(svc.status(*job)) + "\n\n";
+    event = "event: " + std::string(to_string(js)) + "\ndata: " + json_text(status) + "\n\n";
+  } else if (version != state.sent_version || position != state.sent_position) {
+    event = "event: progress\ndata: " + json_text(status) + "\n\n";
   } else {
     event = ": waiting\n\n";  // keeps proxies open and finds departed clients
   }
   state.sent_version = version;
+  state.sent_position = position;
   state.last_sent = Clock::now();
   if (!sink.write(event.data(), event.size())) return false;
   if (is_final(js)) sink.done();

@@ -917,6 +917,40 @@ TEST(ServerEvents, StreamSendsProgressThenDoneAndEnds) {
   }
 }
 
+// A queued job's place moves when a job before it leaves, with no change to its own record:
+// the stream says so (it sent the first place only).
+TEST(ServerEvents, AQueuedJobsStreamFollowsItsPlace) {
+  Settings s = test_settings();
+  s.workers = 1;
+  TestServer server(s);
+  auto c = server.client();
+  std::vector<std::string> ids;
+  for (int i = 0; i < 6; ++i) ids.push_back(submit(*c, std::string(kLong) + "&seed=" + std::to_string(i)));
+  ASSERT_EQ(wait_for(*c, ids[5], [](const Json& st) { return st["queue_position"] == 2; }, 10s)
+                ["queue_position"], 2);
+  std::mutex mu;
+  std::string text;
+  std::thread reader([&] {
+    server.client()->Get("/jobs/" + ids[5] + "/events", [&](const char* data, size_t n) {
+      std::lock_guard lock(mu);
+      text.append(data, n);
+      return true;
+    });
+  });
+  auto has = [&](const std::string& needle) {
+    std::lock_guard lock(mu);
+    return text.find(needle) != std::string::npos;
+  };
+  auto deadline = Clock::now() + 10s;
+  while (!has("\"queue_position\":2") && Clock::now() < deadline) std::this_thread::sleep_for(5ms);
+  EXPECT_EQ(code_of(c->Delete("/jobs/" + ids[4])), 200);
+  deadline = Clock::now() + 10s;
+  while (!has("\"queue_position\":1") && Clock::now() < deadline) std::this_thread::sleep_for(5ms);
+  EXPECT_TRUE(has("\"queue_position\":1")) << text;
+  for (const std::string& id : ids) c->Delete("/jobs/" + id);
+  reader.join();
+}
+
 TEST(ServerEvents, StreamsOverTheCapAre503AndACancelEndsTheStream) {
   Settings s = test_settings();
   s.max_event_streams = 1;
