@@ -73,7 +73,8 @@ void Service::on_finished(Job& job, RenderJob* render) {
       cache_.put(partial_key(before ? before->image_name : job.id),
                  std::make_shared<const std::string>(bytes.begin(), bytes.end()));
     } catch (const std::exception&) {
-    }  // (out of memory: the partial image is black, as it was)
+      // Out of memory: its partial image is black, as before it stopped.
+    }
   }
   if (state == JobState::done) {
     try {
