@@ -544,25 +544,30 @@ TEST(ModelParser, ReportsAMissingMaterialName) {
   for (const Diagnostic& e : errors) EXPECT_FALSE(has_text(e.message, "'material' ("));
 }
 
+// Loads `body` (after the usual head) with both loaders: the objects' materials are named
+// `names`, in order.
+void expect_material_names(const std::string& body, const std::vector<std::string>& names) {
+  for (const bool fast : {false, true}) {
+    SCOPED_TRACE(fast ? "the fast loader" : "the described scene");
+    LoadedScene loaded = load_scene(with_head(body), fast ? LoadDetail::scene : LoadDetail::full);
+    ASSERT_TRUE(loaded.scene) << dump(loaded.diags);
+    const Scene& scene = *loaded.scene;
+    ASSERT_EQ(scene.objects.size(), names.size());
+    for (std::size_t i = 0; i < names.size(); ++i)
+      EXPECT_EQ(scene.materials[scene.objects[i].material].name, names[i]);
+  }
+}
+
 // A JSON scene may name a material "radius"; its model file must read back. The word after
 // `material` is then the name, unless that word's own value follows it (the name left out).
 TEST(ModelParser, AMaterialNamedLikeAnAttributeIsAName) {
-  for (const bool fast : {false, true}) {
-    SCOPED_TRACE(fast ? "the fast loader" : "the described scene");
-    const std::string text = with_head(
-        "material radius { ambient 1 }\nmaterial normal { ambient .5 }\n"
-        "material texname { ambient .2 }\n"
-        "sphere s { material radius center 0 0 -5 radius 1 }\n"
-        "plane p { material normal normal 0 1 0 point 0 0 0 }\n"
-        "sphere t { center 0 2 -5 radius 1 material texname }\n");
-    LoadedScene loaded = load_scene(text, fast ? LoadDetail::scene : LoadDetail::full);
-    ASSERT_TRUE(loaded.scene) << dump(loaded.diags);
-    const Scene& scene = *loaded.scene;
-    ASSERT_EQ(scene.objects.size(), 3u);
-    EXPECT_EQ(scene.materials[scene.objects[0].material].name, "radius");
-    EXPECT_EQ(scene.materials[scene.objects[1].material].name, "normal");
-    EXPECT_EQ(scene.materials[scene.objects[2].material].name, "texname");
-  }
+  expect_material_names(
+      "material radius { ambient 1 }\nmaterial normal { ambient .5 }\n"
+      "material texname { ambient .2 }\n"
+      "sphere s { material radius center 0 0 -5 radius 1 }\n"
+      "plane p { material normal normal 0 1 0 point 0 0 0 }\n"
+      "sphere t { center 0 2 -5 radius 1 material texname }\n",
+      {"radius", "normal", "texname"});
   // Left out, it is one error, at the attribute that came instead.
   const std::string line = "sphere s { material center 0 0 -5 radius 1 }";
   EXPECT_TRUE(is_diag(single_error(line + "\n"), "missing-value", 3, column_of(line, "center"),
@@ -572,20 +577,12 @@ TEST(ModelParser, AMaterialNamedLikeAnAttributeIsAName) {
 // "nan" and "inf" are names where a material is named, as they are where one is defined (a
 // JSON scene's model file must read back); a number is not.
 TEST(ModelParser, AMaterialNamedNanOrInfIsAName) {
-  for (const bool fast : {false, true}) {
-    SCOPED_TRACE(fast ? "the fast loader" : "the described scene");
-    const std::string text = with_head(
-        "material nan { ambient 1 }\nmaterial Infinity { ambient .5 }\n"
-        "sphere s { material nan center 0 0 -5 radius 1 }\n"
-        "tiled_plane p { material Infinity altmaterial nan normal 0 1 0 point 0 0 0 xdir 1 0 0 "
-        "dimensions 1 1 }\n");
-    LoadedScene loaded = load_scene(text, fast ? LoadDetail::scene : LoadDetail::full);
-    ASSERT_TRUE(loaded.scene) << dump(loaded.diags);
-    const Scene& scene = *loaded.scene;
-    ASSERT_EQ(scene.objects.size(), 2u);
-    EXPECT_EQ(scene.materials[scene.objects[0].material].name, "nan");
-    EXPECT_EQ(scene.materials[scene.objects[1].material].name, "Infinity");
-  }
+  expect_material_names(
+      "material nan { ambient 1 }\nmaterial Infinity { ambient .5 }\n"
+      "sphere s { material nan center 0 0 -5 radius 1 }\n"
+      "tiled_plane p { material Infinity altmaterial nan normal 0 1 0 point 0 0 0 xdir 1 0 0 "
+      "dimensions 1 1 }\n",
+      {"nan", "Infinity"});
   const std::string line = "sphere s { material 2 center 0 0 -5 radius 1 }";
   EXPECT_TRUE(is_diag(single_error(line + "\n"), "missing-value", 3, column_of(line, "2"),
                       "'material' needs a material name"));
