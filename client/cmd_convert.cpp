@@ -104,6 +104,10 @@ Runner add_convert(CLI::App& app) {
       if (!options) return int(kBadInput);
       out = write_pov(*loaded->scene, *options);
     }
+    if (const std::string bad = check_not_input(args->out, {args->scene}); !bad.empty()) {
+      std::cerr << "rayfarm: " << bad << "\n";
+      return int(kBadInput);
+    }
     if (!write_output(args->out, out.data(), out.size())) return int(kBadInput);
     // Texture paths are relative to the scene's folder and written as they were: a scene
     // written elsewhere finds its textures only if they are copied beside it.

@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
+#include <string>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -23,6 +25,30 @@ std::string url_encode(const std::string& s) {
 
 bool valid_id(const std::string& id) {
   return id.size() == 32 && id.find_first_not_of("0123456789abcdef") == std::string::npos;
+}
+
+// Why `bytes` are not a whole image in `format` as a server sends one (empty: they are): a
+// PNG from its signature to its IEND chunk, a binary PPM whose pixels fill it exactly. An
+// HTML page, a cut-off transfer or the other format is never saved as the image.
+std::string not_whole_image(const std::string& bytes, const std::string& format) {
+  if (format == "ppm") {
+    std::istringstream in(bytes);
+    std::string magic;
+    long long w = 0, h = 0, maxval = 0;
+    in >> magic >> w >> h >> maxval;
+    if (!in || magic != "P6" || w <= 0 || h <= 0 || maxval != 255 || in.get() == EOF)
+      return "it is not a PPM image";
+    const auto header = static_cast<long long>(in.tellg());
+    if (static_cast<long long>(bytes.size()) - header != 3 * w * h)
+      return "its PPM pixels are cut off or followed by other bytes";
+    return "";
+  }
+  static const std::string kSignature("\x89PNG\r\n\x1a\n", 8);
+  static const std::string kEnd("\0\0\0\0IEND\xae\x42\x60\x82", 12);
+  if (!bytes.starts_with(kSignature)) return "it is not a PNG image";
+  if (bytes.size() < kSignature.size() + kEnd.size() || !bytes.ends_with(kEnd))
+    return "the PNG image is cut off";
+  return "";
 }
 
 // A job that ended: saves its image, or says why there is none. The server's warnings about
@@ -52,6 +78,12 @@ int finish(const Remote& remote, const nlohmann::json& status, const std::string
   }
   auto res = remote.client()->get("/jobs/" + id + "/image?format=" + format, remote.headers());
   if (!res || res->status != 200) return report_http_error(res, "fetching the image");
+  if (const std::string bad = not_whole_image(res->body, format); !bad.empty()) {
+    std::cerr << "rayfarm: the server's answer to fetching the image of job " << id
+              << " is not the image: " << bad << " (" << res->body.size()
+              << " bytes); nothing was written\n";
+    return kServerError;
+  }
   if (!write_output(out, res->body.data(), res->body.size())) return kBadInput;
   if (!quiet) std::cerr << summary_line(status, out, remote.url) << "\n";
   return kOk;
@@ -83,10 +115,11 @@ std::optional<Remote> remote_for(const IdArgs& args, bool with_id = true) {
     std::cerr << "rayfarm: no server: give --server URL or set RAYFARM_SERVER\n";
     return std::nullopt;
   }
-  if (std::string bad = check_server_url(r.url); !bad.empty()) {
-    std::cerr << "rayfarm: " << bad << "\n";
-    return std::nullopt;
-  }
+  for (const std::string& bad : {check_server_url(r.url), check_token(r.token)})
+    if (!bad.empty()) {
+      std::cerr << "rayfarm: " << bad << "\n";
+      return std::nullopt;
+    }
   if (with_id && !valid_id(args.id)) {
     std::cerr << "rayfarm: '" << args.id << "' is not a job id (32 hex digits)\n";
     return std::nullopt;

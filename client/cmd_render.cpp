@@ -131,10 +131,11 @@ Runner add_render(CLI::App& app) {
           return kBadInput;
         }
     if (!url.empty()) {
-      if (std::string bad = check_server_url(url); !bad.empty()) {
-        std::cerr << "rayfarm: " << bad << "\n";
-        return kBadInput;
-      }
+      for (const std::string& bad : {check_server_url(url), check_token(server_token(args->token))})
+        if (!bad.empty()) {
+          std::cerr << "rayfarm: " << bad << "\n";
+          return kBadInput;
+        }
       // Checked here, its textures read as a local render reads them: the server has no
       // access to this machine's files, so they are uploaded with the scene.
       const FileResolver files = FileResolver::beside(args->scene);

@@ -101,9 +101,10 @@ std::string jobs_table(const nlohmann::json& jobs) {
   std::ostringstream o;
   auto line = [&](const std::string& id, const std::string& state, const std::string& done,
                   const std::string& size, const std::string& spp, const std::string& created) {
-    o << std::left << std::setw(34) << id << std::setw(10) << state << std::right << std::setw(5)
-      << done << "  " << std::left << std::setw(11) << size << std::setw(8) << spp << created
-      << "\n";
+    // A space after each column, however wide its value (SPP 219/1024, SIZE 65535x65535).
+    o << std::left << std::setw(33) << id << ' ' << std::setw(9) << state << ' ' << std::right
+      << std::setw(5) << done << "  " << std::left << std::setw(10) << size << ' '
+      << std::setw(7) << spp << ' ' << created << "\n";
   };
   line("ID", "STATE", "DONE", "SIZE", "SPP", "CREATED");
   for (const auto& j : jobs)

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "cli_common.h"
 #include "commands.h"
@@ -61,7 +62,16 @@ int main(int argc, char** argv) {
   }
   for (auto& [sub, run] : runners)
     if (sub->parsed()) {
-      const int code = run();
+      int code = kOk;
+      try {
+        code = run();
+      } catch (const nlohmann::json::exception& e) {
+        // The one JSON the commands read without checking each field's type is a server's
+        // answer (status, events, errors): one of another shape is the server's failure.
+        std::cerr << "rayfarm: the server's answer is not what rayfarm understands (" << e.what()
+                  << ")\n";
+        return kServerError;
+      }
       // What a command printed (trace, compare, check, report) is its answer: one lost to a
       // full disk or a closed pipe is an error, not a quiet exit 0 (or 1).
       errno = 0;

@@ -55,6 +55,15 @@ std::string server_token(const std::string& flag) {
   return env ? env : "";
 }
 
+std::string check_token(const std::string& token) {
+  for (char c : token)
+    if (c <= ' ' || c == 0x7f)  // (char may be signed: bytes past 0x7f are refused too)
+      return "the token holds a space, a line break or another control character, which "
+             "cannot go in an HTTP header: check --token or RAYFARM_TOKEN (a file with "
+             "Windows line endings leaves a carriage return at its end)";
+  return "";
+}
+
 int report_http_error(const HttpResult& result, const std::string& what,
                       const std::string& scene_name, const std::string* scene_text) {
   if (!result) {

@@ -25,6 +25,8 @@ struct Remote {
 std::string server_url(const std::string& flag);
 // What is wrong with a server URL (another scheme, a path, a bad port); empty when it is fine.
 std::string check_server_url(const std::string& url);
+// Why a token cannot be sent (empty: it can): it goes into a header line as it is.
+std::string check_token(const std::string& token);
 std::string server_token(const std::string& flag);
 
 // Prints a server error body (with FILE:LINE:COL for scene errors) and returns the exit code

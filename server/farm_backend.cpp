@@ -91,6 +91,12 @@ struct FarmBackend::Impl {
     auto lease = pool->acquire(milliseconds(2000));
     if (!lease) throw Unavailable(lease.error().message);
     farm::Connection& c = **lease;
+    // A pooled connection Redis closed while it was idle is opened again now, not found
+    // broken by the request (a 503 and a reconnect delay with Redis up all along).
+    if (c.connected() && c.closed_by_peer()) {
+      c.disconnect();
+      if (auto st = c.connect(); !st) throw Unavailable(st.error().message);
+    }
     if (!c.connected())
       if (auto st = c.ensure_connected(); !st) throw Unavailable(st.error().message);
     farm::FarmClient fc(c, config);
@@ -397,7 +403,11 @@ bool FarmBackend::healthy(nlohmann::json& details) {
   Impl& m = *impl_;
   details = {{"url", m.url}, {"node", m.config.node}, {"units_in_flight", m.node->in_flight()}};
   try {
-    m.call([&](farm::FarmClient& fc) { return fc.connection().command({"PING"}); });
+    // A write, not a PING: a Redis out of memory answers PING and refuses every job.
+    m.call([&](farm::FarmClient& fc) {
+      const std::string key = fc.key("health:" + m.config.node);
+      return fc.connection().command({"SET", key, "1", "PX", "5000"});
+    });
     details["status"] = "ok";
     return true;
   } catch (const Unavailable& e) {

@@ -23,6 +23,35 @@ using Clock = std::chrono::steady_clock;
 constexpr size_t kMaxPathLength = 512;
 thread_local Clock::time_point request_start;
 
+// Client text for one line of the log: control bytes, DEL and '\\' as \xNN.
+std::string log_text(std::string_view s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) {
+    const auto b = static_cast<unsigned char>(c);
+    if (b < 0x20 || b == 0x7f || c == '\\') {
+      char hex[5];
+      std::snprintf(hex, sizeof hex, "\\x%02x", b);
+      out += hex;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+std::string lower_ascii(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string_view trim(std::string_view s) {
+  const size_t a = s.find_first_not_of(" \t");
+  if (a == std::string_view::npos) return {};
+  return s.substr(a, s.find_last_not_of(" \t") - a + 1);
+}
+
 bool constant_time_equal(const std::string& a, const std::string& b) {
   if (a.size() != b.size()) return false;
   unsigned char diff = 0;
@@ -242,9 +271,11 @@ void HttpApi::harden() {
       std::tm tm{};
       gmtime_r(&now, &tm);
       std::strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &tm);
-      std::fprintf(stderr, "%s %s %s %d %zu %.1fms %s\n", when, req.method.c_str(),
-                   req.path.substr(0, 200).c_str(), res.status, res.body.size(), ms,
-                   client_of(req).c_str());
+      // The path is the client's text, decoded: a line break or a terminal's escape in it
+      // would forge or hide lines of the log.
+      std::fprintf(stderr, "%s %s %s %d %zu %.1fms %s\n", when, log_text(req.method).c_str(),
+                   log_text(req.path.substr(0, 200)).c_str(), res.status, res.body.size(), ms,
+                   log_text(client_of(req)).c_str());
     }
   });
 }
@@ -264,6 +295,15 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
       GuardedServer::close_after(res);
       return true;
     }
+  // A framing header with an empty value is dropped by the library, which then reads no
+  // body: the bytes sent as one would be read as the next request.
+  for (const char* name : {"Content-Length", "Transfer-Encoding", "Content-Encoding"})
+    if (GuardedServer::empty_header(name)) {
+      send_error(res, 400, name[8] == 'L' ? "bad_content_length" : "bad_header",
+                 "the request's " + std::string(name) + " header is empty");
+      GuardedServer::close_after(res);
+      return true;
+    }
   // Chunked bodies skip the payload limit in this cpp-httplib; compressed ones are inflated
   // without limit. Neither is needed by any client of this API.
   if (req.has_header("Transfer-Encoding")) {
@@ -272,7 +312,8 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
                "the body with a Content-Length");
     return true;
   }
-  if (req.has_header("Content-Encoding") && req.get_header_value("Content-Encoding") != "identity") {
+  if (req.has_header("Content-Encoding") &&
+      lower_ascii(trim(req.get_header_value("Content-Encoding"))) != "identity") {
     send_error(res, 415, "unsupported_encoding",
                "compressed request bodies are not accepted; send the body uncompressed");
     return true;
@@ -286,6 +327,7 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
     if (req.get_header_value_count("Content-Length") > 1 || !digits) {
       send_error(res, 400, "bad_content_length",
                  "the request must have one Content-Length, a number of bytes in digits");
+      GuardedServer::close_after(res);
       return true;
     }
     // The library reads a body for POST, PUT, PATCH and DELETE only: on any other method

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <set>
 #include <vector>
 
 #include "rayfarm/diagnostic.h"
@@ -158,10 +159,23 @@ ApiError ambiguous_query(std::string_view target) {
   const size_t q = target.find('?');
   if (q == std::string_view::npos) return {};
   std::string_view query = target.substr(q + 1);
+  std::set<std::string> names;
   while (!query.empty()) {
     const size_t amp = query.find('&');
     const std::string_view piece = query.substr(0, amp);
     const size_t eq = piece.find('=');
+    // A name given twice, the same pair too: the library keeps one of identical pairs, so
+    // its params cannot tell.
+    if (!piece.empty()) {
+      const std::string name =
+          httplib::detail::decode_url(std::string(piece.substr(0, eq)), true);
+      if (!names.insert(name).second) {
+        ApiError e =
+            api_error(400, "invalid_option", "'" + name.substr(0, 64) + "' is given more than once");
+        e.path = name.substr(0, 64);
+        return e;
+      }
+    }
     if (eq != std::string_view::npos && piece.find('=', eq + 1) != std::string_view::npos) {
       const std::string name = httplib::detail::decode_url(std::string(piece.substr(0, eq)), true);
       ApiError e = api_error(400, "invalid_option",

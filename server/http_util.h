@@ -57,8 +57,8 @@ ApiError not_yes_no(const std::string& name, const std::string& value);
 // ?NAME=1, true or yes.
 bool param_true(const httplib::Request& req, const char* name);
 // A query piece with two '=' (`spp=2=3`, or `seed=1;spp=9`: ';' separates nothing): cpp-httplib
-// keeps what follows the last one, a value the client never sent. A 400 invalid_option to
-// answer, or none.
+// keeps what follows the last one, a value the client never sent; or a name given twice. A
+// 400 invalid_option to answer, or none.
 ApiError ambiguous_query(std::string_view target);
 // A yes/no query option: 1, true, yes, 0, false or no when given; anything else (wait=2) is
 // answered 400 invalid_option here, and false returned.

@@ -749,6 +749,16 @@ TEST(CheckCli, AnOutputThatIsAnInputIsRefused) {
   Outcome c = run(kRayfarm + " compare " + a + " " + a + " --diff " + q((dir / "." / "a.png").string()) + " 2>&1");
   EXPECT_EQ(c.code, 2) << c.out;
   EXPECT_EQ(read_file(dir / "a.png"), image);
+  // convert onto its own scene, in any output form.
+  fs::copy_file(RAYFARM_SOURCE_DIR "/scenes/minimal.txt", dir / "m.txt");
+  const std::string scene = read_file(dir / "m.txt");
+  for (const char* to : {"pov", "model", "json"}) {
+    Outcome v = run("cd " + q(dir.string()) + " && " + kRayfarm + " convert m.txt --to " + to +
+                    " -o ./m.txt 2>&1");
+    EXPECT_EQ(v.code, 2) << to << v.out;
+    EXPECT_NE(v.out.find("is the input m.txt itself"), std::string::npos) << v.out;
+    EXPECT_EQ(read_file(dir / "m.txt"), scene) << to;
+  }
 }
 
 TEST(CheckCli, AnImageTooLargeToRenderIsAnError) {
@@ -1212,6 +1222,78 @@ TEST_F(RemoteCli, AnswersThatNeverEndAreRefusedWithAReason) {
   EXPECT_NE(status.out.find("job " + id + ": the server's answer is larger than 1 GiB"),
             std::string::npos)
       << status.out;
+}
+
+// A server whose answers have another shape than the API's: a field of the wrong type is the
+// server's failure (exit 3), never a crash; an image that is not one is not saved.
+TEST_F(RemoteCli, AnswersOfTheWrongShapeAreTheServersFailure) {
+  REQUIRE_CLIENT();
+  const std::string id(32, 'b');
+  std::string status_body, image_body;
+  std::mutex mutex;
+  rayfarm::test::HostileServer server([&](rayfarm::test::HostileServer& s, int fd,
+                                          const std::string& request) {
+    const std::string path = request.substr(request.find(' ') + 1);
+    std::string body, type = "application/json", status = "200 OK";
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (path.rfind("/jobs/" + id + "/image", 0) == 0) {
+        body = image_body;
+        type = "image/png";
+      } else if (path.rfind("/jobs/" + id + "/events", 0) == 0) {
+        status = "404 Not Found";
+        body = R"({"error":{"code":"not_found","message":"no stream"}})";
+      } else {
+        body = status_body;
+      }
+    }
+    s.send(fd, "HTTP/1.1 " + status + "\r\nConnection: close\r\nContent-Type: " + type +
+                   "\r\nContent-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body);
+  });
+  ASSERT_FALSE(server.url().empty());
+  const std::string at = " --server " + server.url() + " 2>&1";
+  auto serve = [&](const std::string& status_json, const std::string& image) {
+    std::lock_guard<std::mutex> lock(mutex);
+    status_body = status_json;
+    image_body = image;
+  };
+  const std::string wait = " wait " + id + " -o " + out("s.png");
+  for (const auto& [odd, commands] : std::vector<std::pair<std::string, std::vector<std::string>>>{
+           {R"({"id":")" + id + R"(","state":7})", {" status " + id, wait}},
+           {R"({"id":")" + id + R"(","state":"failed","error":{"message":42}})",
+            {" status " + id, wait}},
+           // (status shows no warning's line)
+           {R"({"id":")" + id + R"(","state":"done","warnings":[{"message":"w","line":"one"}]})",
+            {wait}}}) {
+    serve(odd, "");
+    for (const std::string& command : commands) {
+      Outcome r = run(kRayfarm + command + at);
+      EXPECT_EQ(r.code, 3) << odd << command << r.out;
+      EXPECT_NE(r.out.find("the server's answer is not what rayfarm understands"),
+                std::string::npos)
+          << r.out;
+    }
+  }
+  const std::string done = R"({"id":")" + id + R"(","state":"done","width":4,"height":3})";
+  for (const std::string& image : {std::string("<html>oops</html>"), std::string(),
+                                   std::string("\x89PNG\r\n\x1a\n\0\0\0\rIHDR", 16)}) {
+    serve(done, image);
+    Outcome r = run(kRayfarm + " wait " + id + " -o " + out("w.png") + at);
+    EXPECT_EQ(r.code, 3) << r.out;
+    EXPECT_NE(r.out.find("is not the image"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(dir_ / "w.png"));
+  }
+  // A PNG asked for as PPM is not the image either.
+  serve(done, std::string("\x89PNG\r\n\x1a\n", 8) + std::string(20, '\0') +
+                  std::string("\0\0\0\0IEND\xae\x42\x60\x82", 12));
+  Outcome ppm = run(kRayfarm + " wait " + id + " -o " + out("w.ppm") + at);
+  EXPECT_EQ(ppm.code, 3) << ppm.out;
+  EXPECT_FALSE(fs::exists(dir_ / "w.ppm"));
+  // A token that cannot go in a header line is refused before anything is sent.
+  Outcome token =
+      run(kRayfarm + " status " + id + " --token \"$(printf 'abc\\r\\nX-Injected: yes')\"" + at);
+  EXPECT_EQ(token.code, 2) << token.out;
+  EXPECT_NE(token.out.find("the token holds"), std::string::npos) << token.out;
 }
 
 // docs/cli.md keeps up with --help: every option a command offers is in its section, and every

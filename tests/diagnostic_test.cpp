@@ -200,9 +200,22 @@ TEST(FormatDiagnostic, SurvivesAPositionPastTheEndOfTheSource) {
   EXPECT_EQ(text, "f:1:500: error: bad\n  short\n       ^\n");
 }
 
-TEST(FormatDiagnostic, LeavesOutAnOverlongSourceLine) {
+TEST(FormatDiagnostic, ShowsTheStretchOfAnOverlongLineAroundItsColumn) {
   Diagnostic d{Severity::error, "x", "bad", {1, 1, {}}};
-  EXPECT_EQ(format_diagnostic(d, "f", std::string(100000, 'a')), "f:1:1: error: bad\n");
+  EXPECT_EQ(format_diagnostic(d, "f", std::string(100000, 'a')),
+            "f:1:1: error: bad\n  " + std::string(60, 'a') + "...\n  ^\n");
+  // Minified JSON: one long line, the error in its middle.
+  std::string line = std::string(500, 'a') + "b" + std::string(500, 'c');
+  d.where.column = 501;
+  EXPECT_EQ(format_diagnostic(d, "f", line), "f:1:501: error: bad\n  ..." + std::string(60, 'a') +
+                                                 "b" + std::string(59, 'c') + "...\n     " +
+                                                 std::string(60, ' ') + "^\n");
+  // Never inside a UTF-8 character: the cut moves to its start.
+  std::string utf8;
+  for (int i = 0; i < 300; ++i) utf8 += "\xC3\xA9";  // é
+  d.where.column = 301;  // the first byte of the 151st é
+  const std::string shown = format_diagnostic(d, "f", utf8);
+  EXPECT_NE(shown.find("  ...\xC3\xA9"), std::string::npos) << shown;
 }
 
 TEST(FormatDiagnostics, EndsWithANoteWhenErrorsWereDropped) {

@@ -11,6 +11,7 @@
 #include <string_view>
 #include <vector>
 
+#include "format/json_tree.h"
 #include "rayfarm/load.h"
 #include "test_util.h"
 #include "util/lines.h"
@@ -111,6 +112,14 @@ TEST(JsonScene, DetectsJsonByItsFirstNonBlankCharacter) {
   EXPECT_EQ(detect_format("camera {"), SceneFormat::model);
   EXPECT_EQ(detect_format("# {\n"), SceneFormat::model);
   EXPECT_EQ(detect_format(""), SceneFormat::model);
+  // No model file begins with these: JSON of the wrong shape, refused as such.
+  EXPECT_EQ(detect_format(" [{}]"), SceneFormat::json);
+  EXPECT_EQ(detect_format("\"camera\""), SceneFormat::json);
+  for (std::string_view text : {R"([{"camera": {}}])", R"("a scene")"}) {
+    LoadedScene loaded = load_scene(text);
+    ASSERT_EQ(loaded.diags.items().size(), 1u) << dump(loaded.diags);
+    EXPECT_EQ(loaded.diags.items()[0].code, "json-type");
+  }
 }
 
 TEST(JsonScene, SkipsAByteOrderMark) {
@@ -390,8 +399,9 @@ TEST(JsonScene, ReportsEveryIndependentError) {
                   {"type": "sphere", "material": "x", "center": [0, 0, 0], "radius": 1}]})");
   std::vector<Diagnostic> errors = errors_of(loaded.diags);
   ASSERT_EQ(errors.size(), 3u) << dump(loaded.diags);
-  EXPECT_EQ(errors[0].where.path, "/objects/0/center");
-  EXPECT_EQ(errors[1].where.path, "/materials/m/shininess");
+  // In the order of the file, whichever pass found each.
+  EXPECT_EQ(errors[0].where.path, "/materials/m/shininess");
+  EXPECT_EQ(errors[1].where.path, "/objects/0/center");
   EXPECT_EQ(errors[2].where.path, "/objects/1/material");
 }
 
@@ -414,6 +424,18 @@ TEST(JsonScene, ANulByteIsAnErrorWhereItIs) {
   EXPECT_EQ(d.where.line, 2);
   EXPECT_EQ(d.where.column, 1);
   EXPECT_NE(d.message.find("NUL"), std::string::npos) << d.message;
+}
+
+// At the start of the token that does not fit, not its last byte.
+TEST(JsonScene, PlacesASyntaxErrorAtTheStartOfItsToken) {
+  const std::string line = R"(  "camera": {"pixeldim": [400, 300] "worlddim": [8, 6]})";
+  Diagnostic d = single_error("{\n" + line + "\n}");
+  EXPECT_EQ(d.where.line, 2);
+  EXPECT_EQ(d.where.column, static_cast<int>(line.find("\"worlddim")) + 1);
+  d = single_error(R"({"camera": {"pixeldim": [0x10, 6]}})");
+  EXPECT_EQ(d.where.column, 26);
+  d = single_error(R"({"camera": {"pixeldim": [1, 2] "a\"b": 1}})");
+  EXPECT_EQ(d.where.column, 32);
 }
 
 TEST(JsonScene, ReportsASyntaxErrorWithLineAndColumn) {
@@ -518,6 +540,68 @@ TEST(JsonScene, ReadsRenderOptions) {
   EXPECT_EQ(options.precision, Precision::f32);
   ASSERT_EQ(s.render.size(), 8u);
   EXPECT_EQ(s.render[0].where.path, "/render/spp");
+}
+
+// As the command line reads the same text: an integer option refuses 4.0 and 1e3 as it
+// refuses --spp 4.0, so a seed past 2^53 cannot be rounded on its way through a double.
+TEST(JsonScene, ReadsRenderNumbersAsTheTextTheyAreWritten) {
+  for (std::string_view render : {R"("spp": 4.0)", R"("spp": 1e0)", R"("seed": 1e3)",
+                                  R"("seed": 9007199254740993.0)", R"("max_depth": 2.0)"}) {
+    SCOPED_TRACE(render);
+    Diagnostic d = single_error(scene_with_sphere(kGoodSphere, ", \"render\": {" +
+                                                                   std::string(render) + "}"));
+    EXPECT_EQ(d.code, "bad-option");
+    EXPECT_NE(d.message.find("must be an integer"), std::string::npos) << d.message;
+  }
+  // A list only where the option takes one.
+  Diagnostic d = single_error(scene_with_sphere(kGoodSphere, R"(, "render": {"spp": [4]})"));
+  EXPECT_TRUE(is_diag(d, "bad-option", "/render/spp", "wrong type (an array)"));
+  Scene s = scene_of(scene_with_sphere(
+      kGoodSphere, R"(, "render": {"max_dist": 2.0, "bailout": 1e-3, "background": [0.25]})"));
+  RenderOptions options;
+  Diagnostics diags;
+  apply_options(options, s.render, diags);
+  ASSERT_FALSE(diags.has_errors()) << dump(diags);
+  EXPECT_EQ(options.max_dist, 2.0);
+  EXPECT_EQ(options.bailout, 1e-3);
+  EXPECT_EQ(options.background, (std::array<double, 3>{0.25, 0.25, 0.25}));
+}
+
+// Errors come from passes by kind; they are listed as the file has them.
+TEST(JsonScene, ListsErrorsInTheOrderOfTheFile) {
+  LoadedScene loaded = load_scene(R"({
+ "render": {"spp": 0},
+ "objects": [
+   {"type": "sphere", "material": "nope", "center": [1, 1, 1], "radius": 1},
+   {"type": "sphere", "material": "m", "center": [1, 1, 1], "radius": -1, "zz": 1}],
+ "materials": {"m": {"ambient": -1}},
+ "camera": {"pixeldim": [0, 12], "worlddim": [8, 6], "viewpoint": [4, 3, 5]}})");
+  std::vector<std::string> paths;
+  for (const Diagnostic& d : loaded.diags.items()) paths.push_back(d.where.path);
+  EXPECT_EQ(paths, (std::vector<std::string>{"/render/spp", "/objects/0/material",
+                                             "/objects/1/radius", "/objects/1/zz",
+                                             "/materials/m/ambient", "/camera/pixeldim/0"}))
+      << dump(loaded.diags);
+}
+
+TEST(JsonPointerOffsets, FindsKeysAndElementsAndFallsBackToTheHolder) {
+  const std::string text = "\xEF\xBB\xBF{\"a\": [1, {\"b~/\\u00e9\": 2}], \"c\": {}}";
+  const std::vector<std::string> pointers = {"", "/a", "/a/0", "/a/1", "/a/1/b~0~1\xC3\xA9",
+                                             "/c/missing", "/zz", "/a/7"};
+  const std::vector<size_t> at = json_pointer_offsets(text, pointers);
+  ASSERT_EQ(at.size(), pointers.size());
+  EXPECT_EQ(at[0], 0u);
+  EXPECT_EQ(at[1], text.find("\"a\""));
+  EXPECT_EQ(at[2], text.find('1'));
+  EXPECT_EQ(at[3], text.find("{\"b"));
+  EXPECT_EQ(at[4], text.find("\"b"));
+  EXPECT_EQ(at[5], text.find("\"c\""));  // left out: at its object
+  EXPECT_EQ(at[6], 0u);                  // nothing holds it but the root
+  EXPECT_EQ(at[7], text.find("\"a\""));
+  // Not JSON at all: what could be read, never past the text.
+  for (std::string_view bad : {"{\"a\": [1, 2", "{\"a", "[[[", "\"", "{\"a\" 1}"})
+    for (size_t offset : json_pointer_offsets(bad, {"/a/1", "/a", "/0/0"}))
+      EXPECT_LE(offset, bad.size());
 }
 
 TEST(JsonScene, ReadsAGreyBackgroundAndACameraChoice) {

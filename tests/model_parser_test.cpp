@@ -155,6 +155,58 @@ TEST(ModelParser, ReportsAStrayValueBetweenEntities) {
   EXPECT_TRUE(is_diag(d, "unknown-entity", 3, 1, "unexpected value '5' outside an entity"));
 }
 
+// A stray value or word names no entity: the unnamed camera or light after it is read, and
+// its own errors reported.
+TEST(ModelParser, AStrayTokenDoesNotSwallowTheEntityAfterIt) {
+  for (std::string_view stray : {"1.5", "nan", "foo"}) {
+    SCOPED_TRACE(stray);
+    LoadedScene loaded = load_scene(
+        "material m { ambient 1 }\n" + std::string(stray) +
+        "\ncamera { pixeldim 16 12 worlddim 8 6 viewpoint 4 3 5 }\n"
+        "light { location 1 2 3 emissivity -1 1 1 }\n");
+    std::vector<Diagnostic> errors = errors_of(loaded.diags);
+    ASSERT_EQ(errors.size(), 2u) << dump(loaded.diags);
+    EXPECT_EQ(errors[0].code, "unknown-entity");
+    EXPECT_EQ(errors[0].where.line, 2);
+    EXPECT_EQ(errors[1].where.line, 4);  // the light's emissivity; no "no camera"
+  }
+  // A misspelt keyword still keeps its own name.
+  Diagnostic d = single_error("materail shiny { diffuse 1 }\nsphere { material shiny center 0 0 "
+                              "-5 radius 1 }\n");
+  EXPECT_EQ(d.code, "unknown-entity");
+}
+
+// Independent mistakes in one plane-like entity are all reported, not one per fix.
+TEST(ModelParser, ReportsEveryMistakeOfAFinitePlane) {
+  struct Case {
+    std::string entity;
+    std::vector<std::string> codes;
+  };
+  const Case cases[] = {
+      {"fplane { material zz normal 0 0 1 point 0 0 0 xdir 1 0 0 dimensions -1 1 }",
+       {"undefined-material", "out-of-range"}},
+      {"fplane { material m normal 0 0 0 point 0 0 0 xdir 1 0 0 dimensions -1 1 }",
+       {"out-of-range", "out-of-range"}},
+      {"fplane { material m normal 0 0 1 point 0 0 0 xdir 0 0 1 dimensions -1 1 }",
+       {"out-of-range", "out-of-range"}},
+      {"tiled_plane { material zz altmaterial m normal 0 1 0 point 0 0 0 dimension -1 1 }",
+       {"undefined-material", "out-of-range"}},
+      {"texplane { material zz normal 0 0 1 point 0 0 0 xdir 1 0 0 dimensions 0 1 "
+       "texname t.ppm }",
+       {"undefined-material", "out-of-range"}},
+      {"projector { location 0 0 5 emissivity 1 1 1 normal 0 0 0 point 0 0 0 xdir 1 0 0 "
+       "dimensions -2 1 texname t.ppm }",
+       {"out-of-range", "out-of-range"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.entity);
+    LoadedScene loaded = load_scene(with_head(c.entity + "\n"));
+    std::vector<std::string> codes;
+    for (const Diagnostic& e : errors_of(loaded.diags)) codes.push_back(e.code);
+    EXPECT_EQ(codes, c.codes) << dump(loaded.diags);
+  }
+}
+
 TEST(ModelParser, ReportsAnUnknownAttributeAndSuggestsTheNearestOne) {
   std::string line = "sphere s { material m center 0 0 -5 radious 1 }";
   Diagnostic d = single_error(line + "\n");

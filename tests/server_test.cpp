@@ -1486,6 +1486,26 @@ TEST(ServerRoutes, CurlDashDAndImagesAreNamed) {
   EXPECT_EQ(error_of(png)["message"].get<std::string>().rfind("this is a PNG image, not a scene", 0), 0u);
 }
 
+// The access log is one line per request: a client's line break or terminal escape in the
+// path is written escaped, never as a line of its own.
+TEST(ServerRoutes, TheAccessLogCannotBeForgedFromThePath) {
+  Settings s = test_settings();
+  s.access_log = true;
+  TestServer server(std::move(s));
+  testing::internal::CaptureStderr();
+  auto r = server.client()->Get(
+      "/x%0a2026-12-06T09:00:00Z%20DELETE%20/jobs/0%20200%2012%201.0ms%20name:alice%1b[2J%5c");
+  ASSERT_TRUE(r);
+  EXPECT_EQ(r->status, 404);
+  server.stop();  // the line is written once the answer is sent
+  const std::string log = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
+  EXPECT_NE(log.find("/x\\x0a2026-12-06T09:00:00Z DELETE /jobs/0 200 12 1.0ms "
+                     "name:alice\\x1b[2J\\x5c"),
+            std::string::npos)
+      << log;
+}
+
 TEST(ServerRoutes, RepeatedOptionsAndUnknownCamerasAreNamed) {
   TestServer server;
   auto c = server.client();
@@ -1493,6 +1513,14 @@ TEST(ServerRoutes, RepeatedOptionsAndUnknownCamerasAreNamed) {
   ASSERT_TRUE(twice);
   EXPECT_EQ(twice->status, 400);
   EXPECT_EQ(error_of(twice)["message"], "'spp' is given more than once");
+  // The same pair twice too (the library keeps one of identical pairs), on any route.
+  for (const char* target : {"/render?spp=4&spp=4", "/render?sample=cho&spp=1&sample=cho",
+                             "/check?course=1&course=1", "/render?s%70p=4&spp=4"}) {
+    auto same = c->Post(target, kScene, "text/plain");
+    ASSERT_TRUE(same);
+    EXPECT_EQ(same->status, 400) << target;
+    EXPECT_EQ(error_of(same)["code"], "invalid_option") << target;
+  }
   auto camera = c->Post("/render?camera=nope", kScene, "text/plain");
   ASSERT_TRUE(camera);
   EXPECT_EQ(camera->status, 400);
@@ -2627,6 +2655,10 @@ TEST(ServerHardening, NoBodyIsTakenForTheNextRequest) {
            {"POST /check HTTP/1.1\r\nContent-Length: 0\r\nContent-Length: " + len + "\r\n",
             "bad_content_length"},
            {"POST /check HTTP/1.1\r\nContent-Length: +" + len + "\r\n", "bad_content_length"},
+           // An empty value, which the library drops as if the line were not there.
+           {"POST /render HTTP/1.1\r\nContent-Length:\r\n", "bad_content_length"},
+           {"POST /check HTTP/1.1\r\nContent-Length: \t\r\n", "bad_content_length"},
+           {"POST /check HTTP/1.1\r\nTransfer-Encoding:\r\n", "bad_header"},
            {"GET /healthz HTTP/1.1\r\nContent-Length: " + len + "\r\n", "unexpected_body"},
            {"OPTIONS /jobs HTTP/1.1\r\nContent-Length: " + len + "\r\n", "unexpected_body"},
            {"POST /check HTTP/1.1\r\nContent-Length : " + len + "\r\n", "bad_header"}}) {

@@ -191,10 +191,11 @@ local function submit(_, a)
   end
   redis.call('HSET', jk, 'state', 'queued')
   redis.call('ZADD', P .. 'queued', t, job)
-  -- Rings are rotated head to tail as they are served, so the head is the next turn: a new job
-  -- goes next among its client's jobs, and a client that joins goes next among the clients
-  -- (a small job behind a big one gets its share at once, as in the local Scheduler).
-  redis.call('LPUSH', P .. 'cj:' .. prio .. ':' .. client, job)
+  -- Rings are rotated head to tail as they are served, so the head is the next turn: a client
+  -- that joins goes next among the clients, and a new job takes its turn after its client's
+  -- other jobs (so a client's jobs start in the order it sent them; each then gets one unit
+  -- a turn, as in the local Scheduler).
+  redis.call('RPUSH', P .. 'cj:' .. prio .. ':' .. client, job)
   if redis.call('LPOS', P .. 'ring:' .. prio, client) == false then
     redis.call('LPUSH', P .. 'ring:' .. prio, client)
   end

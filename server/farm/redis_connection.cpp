@@ -2,6 +2,7 @@
 
 #include <hiredis.h>
 #include <poll.h>
+#include <sys/socket.h>
 #include <sys/time.h>
 
 #include <algorithm>
@@ -38,6 +39,16 @@ Connection::~Connection() { disconnect(); }
 void Connection::disconnect() {
   if (ctx_) redisFree(ctx_);
   ctx_ = nullptr;
+}
+
+bool Connection::closed_by_peer() const {
+  if (!ctx_ || ctx_->fd < 0) return false;
+  pollfd p{ctx_->fd, POLLIN, 0};
+  if (::poll(&p, 1, 0) <= 0) return false;
+  if (p.revents & (POLLERR | POLLHUP)) return true;
+  char byte;
+  const ssize_t n = ::recv(ctx_->fd, &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+  return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
 }
 
 Error Connection::context_error(const char* what) {

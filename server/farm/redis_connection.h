@@ -70,6 +70,9 @@ class Connection {
   Status wait_connected(std::chrono::milliseconds max_wait);
   bool connected() const { return ctx_ != nullptr; }
   void disconnect();
+  // Whether Redis has closed this idle connection (its idle `timeout`, a proxy or NAT that
+  // drops quiet connections): its end of file is waiting to be read. A look, no wait.
+  bool closed_by_peer() const;
 
   // An error reply comes back as an Error (its kind from its first word), not as a Reply.
   Result<Reply> command(std::span<const std::string_view> argv);

@@ -92,6 +92,28 @@ TEST_F(RedisConnection, ATimeoutLeavesTheOutcomeUnknownAndTheNextCommandReconnec
   EXPECT_EQ(c.connects(), 2u);
 }
 
+// Redis's idle `timeout` (or a proxy dropping quiet connections) closes a pooled connection:
+// that is seen before the next command is sent, so the caller can connect again at once.
+TEST_F(RedisConnection, AnIdleConnectionRedisClosedIsSeenBeforeUse) {
+  RedisServer server;
+  ASSERT_TRUE(server.start());
+  Connection admin(server.options());
+  Connection c(server.options());
+  ASSERT_TRUE(c.command({"PING"}));
+  EXPECT_FALSE(c.closed_by_peer());
+  ASSERT_TRUE(admin.command({"CLIENT", "KILL", "TYPE", "normal", "SKIPME", "yes"}));
+  bool seen = false;
+  for (int i = 0; i < 200 && !seen; ++i) {
+    seen = c.closed_by_peer();
+    if (!seen) std::this_thread::sleep_for(5ms);
+  }
+  EXPECT_TRUE(seen);
+  c.disconnect();
+  ASSERT_TRUE(c.connect());
+  EXPECT_FALSE(c.closed_by_peer());
+  EXPECT_TRUE(c.command({"PING"}));
+}
+
 TEST_F(RedisConnection, ANewConnectionWaitsForItsBackoffAndReportsUnavailable) {
   ConnectOptions o;
   o.url.transport = RedisUrl::Transport::Unix;

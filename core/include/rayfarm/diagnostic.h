@@ -40,6 +40,9 @@ class Diagnostics {
   bool truncated() const { return truncated_; }
   const std::vector<Diagnostic>& items() const { return items_; }
   const Diagnostic* first_error() const;
+  // Puts the items in the order of `place` (one per item, as items() lists them), ties as
+  // they were.
+  void reorder(const std::vector<size_t>& place);
 
   // A reader that stops once past the cap (the model parser: a garbage file is not worth
   // reading to its end) says so: error_count() is then a lower bound.

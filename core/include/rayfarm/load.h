@@ -14,8 +14,14 @@ namespace rayfarm {
 
 enum class SceneFormat { model, json };
 
-// JSON when the first non-blank character is '{', a model file otherwise.
+// JSON when the first non-blank character is '{' (or '[' or '"', which begin no model
+// file), a model file otherwise.
 SceneFormat detect_format(std::string_view text);
+
+// Where each diagnostic lies in `text`, as a byte offset: at its line and column, else at
+// its JSON path's place (a member's key, an element's value); 0 for one about the scene as a
+// whole. Sorted by it, they are in the order of the file. load_scene leaves its own so.
+std::vector<size_t> places_in_text(std::string_view text, const std::vector<Diagnostic>& ds);
 
 // What a caller needs back: `full` keeps the parsed description (for converters and content
 // keys); `scene` lets a plainly valid model file skip it, which loads it several times faster.

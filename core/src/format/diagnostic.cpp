@@ -66,6 +66,18 @@ void Diagnostics::warning(std::string code, std::string message, Where where) {
       {Severity::warning, std::move(code), clean(std::move(message)), std::move(where)});
 }
 
+void Diagnostics::reorder(const std::vector<size_t>& place) {
+  std::vector<size_t> order(items_.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return (a < place.size() ? place[a] : 0) < (b < place.size() ? place[b] : 0);
+  });
+  std::vector<Diagnostic> sorted;
+  sorted.reserve(items_.size());
+  for (size_t i : order) sorted.push_back(std::move(items_[i]));
+  items_ = std::move(sorted);
+}
+
 std::string Diagnostics::error_count_text() const {
   return counted_all_ ? std::to_string(errors_) : "more than " + std::to_string(kMaxErrors);
 }
@@ -105,11 +117,26 @@ std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
   out << d.message << '\n';
   if (d.where.line > 0) {
     std::string_view text = source_line(source, d.where.line);
-    if (!text.empty() && text.size() <= 400) {
-      out << "  " << printable(text, true, std::string_view::npos) << "\n  ";
+    size_t upto = std::min(static_cast<size_t>(std::max(d.where.column, 1) - 1), text.size());
+    // A long line (minified JSON is one) is shown as the stretch around the column.
+    constexpr size_t kLongLine = 400, kAround = 60;
+    bool cut_left = false, cut_right = false;
+    if (text.size() > kLongLine) {
+      size_t from = upto > kAround ? upto - kAround : 0;
+      size_t to = std::min(text.size(), upto + kAround);
+      auto continuation = [&](size_t i) { return (static_cast<unsigned char>(text[i]) & 0xC0) == 0x80; };
+      while (from > 0 && continuation(from)) --from;  // whole UTF-8 characters only
+      while (to < text.size() && continuation(to)) ++to;
+      cut_left = from > 0;
+      cut_right = to < text.size();
+      text = text.substr(from, to - from);
+      upto -= from;
+    }
+    if (!text.empty()) {
+      out << "  " << (cut_left ? "..." : "") << printable(text, true, std::string_view::npos)
+          << (cut_right ? "..." : "") << "\n  " << (cut_left ? "   " : "");
       // One space (or the tab) per character the line above shows, so the caret lines up
       // under the offending one after non-ASCII text too (the column counts bytes).
-      const size_t upto = std::min(static_cast<size_t>(d.where.column - 1), text.size());
       for (size_t i = 0; i < upto;) {
         out << (text[i] == '\t' ? '\t' : ' ');
         const size_t n = static_cast<unsigned char>(text[i]) < 0x80 ? 0 : utf8_length(text, i);

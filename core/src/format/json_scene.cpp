@@ -27,6 +27,22 @@ std::string printable(std::string_view s) {
   return s.size() > kMax ? std::string(s.substr(0, kMax)) + "..." : std::string(s);
 }
 
+// A JSON number written with a fraction or an exponent, as text in that form: 4.0 stays
+// "4.0", so an integer option refuses it as the command line refuses --spp 4.0 (and a seed
+// past 2^53 cannot pass through a double unnoticed).
+std::string float_text(double v) {
+  std::string s = format_number(v);
+  if (s.find_first_of(".eEin") == std::string::npos) s += ".0";
+  return s;
+}
+
+// Whether a render option's value is a list (written "R,G,B"): only such an option takes
+// a JSON array.
+bool takes_list(std::string_view key) {
+  const OptionSpec* spec = find_option(key);
+  return spec && spec->value_help.find(',') != std::string_view::npos;
+}
+
 std::string type_name(const Json& j) {
   if (j.is_number()) return "a number";
   return std::string(j.is_array() || j.is_object() ? "an " : "a ") + j.type_name();
@@ -265,9 +281,11 @@ class JsonSceneReader {
         text = v.get<std::string>();
       else if (v.is_boolean())
         text = v.get<bool>() ? "true" : "false";
+      else if (v.is_number_float())
+        text = float_text(v.get<double>());
       else if (v.is_number())
         text = json_number_text(v);
-      else if (v.is_array() && v.size() <= 3) {
+      else if (v.is_array() && v.size() <= 3 && takes_list(key)) {
         for (const Json& c : v) {
           if (!c.is_number()) {
             text = "?";

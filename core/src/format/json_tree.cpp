@@ -1,10 +1,13 @@
 // The JSON reader shared by scenes and assignments (json_tree.h).
 #include "format/json_tree.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <deque>
 #include <set>
+#include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "rayfarm/json_scene.h"
@@ -20,6 +23,8 @@ using Json = nlohmann::ordered_json;
 // after every child), have no depth limit and silently keep the last of repeated keys.
 class TreeBuilder {
  public:
+  explicit TreeBuilder(std::string_view text) : text_(text) {}
+
   bool null() { return add(nullptr); }
   bool boolean(bool v) { return add(v); }
   bool number_integer(Json::number_integer_t v) { return add(v); }
@@ -44,8 +49,29 @@ class TreeBuilder {
     if (e.id == 406) {  // "number overflow parsing": point at the start of the number
       error_offset_ = position >= token.size() ? position - token.size() : 0;
       error_ = "the number " + token.substr(0, 60) + " is too large for a double";
-    } else {  // the position is one past the character that failed
-      error_offset_ = position > 0 ? position - 1 : 0;
+    } else {
+      // The position is one past the character that failed: point at the start of its
+      // token instead, a string's opening quote or a word's first letter or digit.
+      std::size_t at = std::min(position > 0 ? position - 1 : 0, text_.size());
+      auto word = [&](std::size_t i) {
+        const char c = i < text_.size() ? text_[i] : ' ';
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '+' || c == '-';
+      };
+      if (at < text_.size() && text_[at] == '"' && token.size() > 1 && token.back() == '"') {
+        // The closing quote of a string: back to the quote no backslash escapes.
+        for (std::size_t i = at; i-- > 0;) {
+          if (text_[i] != '"') continue;
+          std::size_t slashes = 0;
+          while (slashes < i && text_[i - 1 - slashes] == '\\') ++slashes;
+          if (slashes % 2 == 0) {
+            at = i;
+            break;
+          }
+        }
+      } else {
+        while (at > 0 && word(at) && word(at - 1)) --at;
+      }
+      error_offset_ = at;
       error_ = error_text(e.what());
     }
     return false;
@@ -74,6 +100,7 @@ class TreeBuilder {
   }
 
  private:
+  std::string_view text_;
   struct Frame {
     Json* node = nullptr;
     long index = -1;  // arrays: the element being read
@@ -142,7 +169,195 @@ class TreeBuilder {
   std::string deep_path_;
 };
 
+// A JSON string's value, from the '"' at `at`; `at` ends past the closing quote (or at the
+// end of the text). Escapes decoded, \u pairs to UTF-8, as the reader decodes keys.
+std::string read_string(std::string_view text, std::size_t& at) {
+  std::string out;
+  ++at;
+  auto hex4 = [&](std::size_t i) -> long {
+    if (i + 4 > text.size()) return -1;
+    long v = 0;
+    for (std::size_t k = i; k < i + 4; ++k) {
+      const char c = text[k];
+      const int d = c >= '0' && c <= '9'   ? c - '0'
+                    : c >= 'a' && c <= 'f' ? c - 'a' + 10
+                    : c >= 'A' && c <= 'F' ? c - 'A' + 10
+                                           : -1;
+      if (d < 0) return -1;
+      v = v * 16 + d;
+    }
+    return v;
+  };
+  auto put = [&](unsigned long cp) {
+    if (cp < 0x80) {
+      out += static_cast<char>(cp);
+    } else if (cp < 0x800) {
+      out += static_cast<char>(0xC0 | cp >> 6);
+      out += static_cast<char>(0x80 | (cp & 0x3F));
+    } else if (cp < 0x10000) {
+      out += static_cast<char>(0xE0 | cp >> 12);
+      out += static_cast<char>(0x80 | (cp >> 6 & 0x3F));
+      out += static_cast<char>(0x80 | (cp & 0x3F));
+    } else {
+      out += static_cast<char>(0xF0 | cp >> 18);
+      out += static_cast<char>(0x80 | (cp >> 12 & 0x3F));
+      out += static_cast<char>(0x80 | (cp >> 6 & 0x3F));
+      out += static_cast<char>(0x80 | (cp & 0x3F));
+    }
+  };
+  while (at < text.size() && text[at] != '"') {
+    if (text[at] != '\\') {
+      out += text[at++];
+      continue;
+    }
+    if (++at >= text.size()) break;
+    const char e = text[at++];
+    switch (e) {
+      case 'b': out += '\b'; break;
+      case 'f': out += '\f'; break;
+      case 'n': out += '\n'; break;
+      case 'r': out += '\r'; break;
+      case 't': out += '\t'; break;
+      case 'u': {
+        long cp = hex4(at);
+        if (cp < 0) break;
+        at += 4;
+        if (cp >= 0xD800 && cp < 0xDC00 && at + 1 < text.size() && text[at] == '\\' &&
+            text[at + 1] == 'u') {
+          const long low = hex4(at + 2);
+          if (low >= 0xDC00 && low < 0xE000) {
+            cp = 0x10000 + ((cp - 0xD800) << 10) + (low - 0xDC00);
+            at += 6;
+          }
+        }
+        put(static_cast<unsigned long>(cp));
+        break;
+      }
+      default: out += e;  // \" \\ \/
+    }
+  }
+  if (at < text.size()) ++at;
+  return out;
+}
+
 }  // namespace
+
+std::vector<std::size_t> json_pointer_offsets(std::string_view text,
+                                              const std::vector<std::string>& pointers) {
+  // The pointers and their holders, for those that name nothing.
+  std::unordered_set<std::string> wanted;
+  for (const std::string& p : pointers) {
+    std::size_t end = p.size();
+    while (wanted.insert(p.substr(0, end)).second && end > 0) {
+      end = p.rfind('/', end - 1);
+      if (end == std::string::npos) break;
+    }
+  }
+  constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  std::unordered_map<std::string, std::size_t> found;
+  auto note = [&](const std::string& path, std::size_t offset) {
+    if (wanted.count(path)) found.emplace(path, offset);
+  };
+  // A walk of the text with the pointer of the value in hand; containers on a stack.
+  struct Container {
+    bool object;
+    std::size_t base;  // length of the container's own pointer
+    long index;
+  };
+  std::vector<Container> stack;
+  std::string path;
+  std::size_t at = text.starts_with("\xEF\xBB\xBF") ? 3 : 0;
+  auto skip_blank = [&] {
+    while (at < text.size() &&
+           (text[at] == ' ' || text[at] == '\t' || text[at] == '\n' || text[at] == '\r'))
+      ++at;
+  };
+  // A member's key (noted at its quote) and its ':', or false where the text has none.
+  auto member = [&] {
+    if (at >= text.size() || text[at] != '"') return false;
+    const std::size_t key_at = at;
+    path += "/" + json_pointer_token(read_string(text, at));
+    note(path, key_at);
+    skip_blank();
+    if (at >= text.size() || text[at] != ':') return false;
+    ++at;
+    return true;
+  };
+  auto element = [&](long index) {
+    path += "/" + std::to_string(index);
+    note(path, at);
+  };
+  note(path, 0);
+  bool want_value = true;  // else: after a value, a ',' or a closing bracket is next
+  while (at < text.size()) {
+    skip_blank();
+    if (at >= text.size()) break;
+    const char c = text[at];
+    if (want_value) {
+      if (c == '{' || c == '[') {
+        stack.push_back({c == '{', path.size(), 0});
+        ++at;
+        skip_blank();
+        if (at < text.size() && (text[at] == '}' || text[at] == ']')) {
+          ++at;
+          stack.pop_back();
+          want_value = false;
+          continue;
+        }
+        if (c == '{') {
+          if (!member()) break;
+        } else {
+          element(0);
+        }
+        continue;
+      }
+      if (c == '"') {
+        read_string(text, at);
+      } else {
+        while (at < text.size() && text[at] != ',' && text[at] != '}' && text[at] != ']' &&
+               text[at] != ' ' && text[at] != '\n' && text[at] != '\r' && text[at] != '\t')
+          ++at;
+      }
+      want_value = false;
+      continue;
+    }
+    if (stack.empty()) break;
+    Container& top = stack.back();
+    path.resize(top.base);
+    if (c == ',') {
+      ++at;
+      skip_blank();
+      if (top.object) {
+        if (!member()) break;
+      } else {
+        element(++top.index);
+      }
+      want_value = true;
+    } else if (c == '}' || c == ']') {
+      ++at;
+      stack.pop_back();
+    } else {
+      break;
+    }
+  }
+  std::vector<std::size_t> out(pointers.size(), kNone);
+  for (std::size_t i = 0; i < pointers.size(); ++i) {
+    std::string_view p = pointers[i];
+    for (;;) {  // the pointer, else the nearest holder found
+      if (auto it = found.find(std::string(p)); it != found.end()) {
+        out[i] = it->second;
+        break;
+      }
+      const std::size_t slash = p.rfind('/');
+      if (slash == std::string_view::npos) {
+        out[i] = 0;
+        break;
+      }
+      p = p.substr(0, slash);
+    }
+  }
+  return out;
+}
 
 std::string json_pointer_token(std::string_view key) {
   std::string out;
@@ -176,7 +391,7 @@ std::optional<Json> parse_json_tree(std::string_view text, Diagnostics& diags) {
                 position_of_offset(text, nul));
     return std::nullopt;
   }
-  TreeBuilder builder;
+  TreeBuilder builder(text);
   bool parsed = false;
   try {
     parsed = Json::sax_parse(text.begin(), text.end(), &builder);

@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "rayfarm/diagnostic.h"
 
@@ -25,5 +26,12 @@ std::string json_number_text(const nlohmann::ordered_json& number);
 // an error at its path ("duplicate-key"), and the document is still returned, holding the
 // first value, so that its reader can say what else is wrong.
 std::optional<nlohmann::ordered_json> parse_json_tree(std::string_view text, Diagnostics& diags);
+
+// Where each JSON Pointer of `pointers` lies in `text`: the byte offset of a member's key or
+// an element's value. A pointer that names nothing there (a member left out) gets the place
+// of the nearest value that holds it; the root is at the document's start. For ordering
+// errors as the file has them; text that is not JSON gives what could be read of it.
+std::vector<std::size_t> json_pointer_offsets(std::string_view text,
+                                              const std::vector<std::string>& pointers);
 
 }  // namespace rayfarm

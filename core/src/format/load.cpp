@@ -1,6 +1,10 @@
 // Scene text to a checked scene.
 #include "rayfarm/load.h"
 
+#include <algorithm>
+#include <vector>
+
+#include "format/json_tree.h"
 #include "format/model_fast.h"
 #include "rayfarm/json_scene.h"
 #include "rayfarm/model_parser.h"
@@ -11,7 +15,8 @@ SceneFormat detect_format(std::string_view text) {
   if (text.starts_with("\xEF\xBB\xBF")) text.remove_prefix(3);  // UTF-8 byte-order mark
   for (char c : text) {
     if (c == ' ' || c == '\t' || c == '\n' || c == '\r') continue;
-    return c == '{' ? SceneFormat::json : SceneFormat::model;
+    // '[' and '"' begin no model file: JSON of the wrong shape, to be told so as JSON.
+    return c == '{' || c == '[' || c == '"' ? SceneFormat::json : SceneFormat::model;
   }
   return SceneFormat::model;
 }
@@ -42,6 +47,33 @@ std::optional<std::string> RecordingResolver::read(const std::string& path,
   return bytes;
 }
 
+std::vector<size_t> places_in_text(std::string_view text, const std::vector<Diagnostic>& ds) {
+  std::vector<size_t> place(ds.size(), 0);
+  std::vector<std::string> pointers;
+  std::vector<size_t> by_pointer;
+  std::vector<size_t> line_start;  // filled on the first diagnostic with a line
+  for (size_t i = 0; i < ds.size(); ++i) {
+    const Where& w = ds[i].where;
+    if (w.line > 0) {
+      if (line_start.empty()) {
+        line_start.push_back(0);
+        for (size_t k = 0; k < text.size(); ++k)
+          if (text[k] == '\n') line_start.push_back(k + 1);
+      }
+      const size_t line = std::min(static_cast<size_t>(w.line), line_start.size()) - 1;
+      place[i] = line_start[line] + static_cast<size_t>(std::max(w.column, 1) - 1);
+    } else if (!w.path.empty()) {
+      pointers.push_back(w.path);
+      by_pointer.push_back(i);
+    }
+  }
+  if (!pointers.empty()) {
+    const std::vector<size_t> offsets = json_pointer_offsets(text, pointers);
+    for (size_t k = 0; k < by_pointer.size(); ++k) place[by_pointer[k]] = offsets[k];
+  }
+  return place;
+}
+
 LoadedScene load_scene(std::string_view text, LoadDetail detail,
                        const ResourceResolver* resolver) {
   LoadedScene out;
@@ -62,6 +94,10 @@ LoadedScene load_scene(std::string_view text, LoadDetail detail,
     out.scene = build_scene(out.desc, out.diags);
   if (out.scene && resolver && !resolve_textures(*out.scene, *resolver, out.diags))
     out.scene.reset();
+  // A JSON scene's errors come from passes by kind (structure, then materials, objects,
+  // ...); a model file's are read in order already.
+  if (format == SceneFormat::json && out.diags.items().size() > 1)
+    out.diags.reorder(places_in_text(text, out.diags.items()));
   return out;
 }
 

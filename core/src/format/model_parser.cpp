@@ -112,7 +112,9 @@ class ModelParser {
     Token t = lex_.next();
     if (std::string_view why = unsupported_entity(t.text); !why.empty()) {
       diags_.error("unsupported-entity", std::string(why), at(t));
-      if (lex_.peek().kind == Token::word && lex_.peek(1).kind == Token::open) lex_.next();
+      if (lex_.peek().kind == Token::word && lex_.peek(1).kind == Token::open &&
+          !find_entity(lex_.peek().text))
+        lex_.next();
       if (lex_.peek().kind == Token::open) skip_block();
       return std::nullopt;
     }
@@ -134,7 +136,10 @@ class ModelParser {
       stand_in->where = at(t);
       mark_all_invalid(*stand_in);
     }
-    if (lex_.peek().kind == Token::word && lex_.peek(1).kind == Token::open) {
+    // Its NAME, if it has one: never after a stray value, and never an entity keyword (a
+    // stray word before an unnamed camera or light must not swallow that entity).
+    if (!looks_like_value(t.text) && lex_.peek().kind == Token::word &&
+        lex_.peek(1).kind == Token::open && !find_entity(lex_.peek().text)) {
       Token name = lex_.next();
       if (stand_in && is_valid_name(name.text)) {
         stand_in->name = std::string(name.text);

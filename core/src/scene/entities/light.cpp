@@ -68,9 +68,8 @@ void build_projector(EntityReader& r, Scene& scene) {
   auto plane = read_plane(r);
   auto texture = r.texture("texname");
   auto mode = r.integer("mode");
-  if (!l || !plane || !texture || !mode) return;
-  auto window = read_window(r, *plane);
-  if (!window) return;
+  auto window = read_window(r, plane);
+  if (!l || !plane || !texture || !mode || !window) return;
   l->point = plane->point;
   l->normal = plane->normal;
   l->window = *window;

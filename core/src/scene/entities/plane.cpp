@@ -51,16 +51,14 @@ void build_plane(EntityReader& r, Scene& scene) {
 void build_fplane(EntityReader& r, Scene& scene) {
   auto plane = read_plane(r);
   auto m = r.material("material");
-  if (!plane || !m) return;
-  auto window = read_window(r, *plane);
-  if (!window) return;
+  auto window = read_window(r, plane);
+  if (!plane || !m || !window) return;
   scene.objects.push_back(r.object(*m, FinitePlane{*plane, *window}));
 }
 
 void build_tiled(EntityReader& r, Scene& scene) {
   auto plane = read_plane(r);
   auto m = r.material("material"), alt = r.material("altmaterial");
-  if (!plane || !m || !alt) return;
   const bool modern = r.has("xdir") || r.has("dimensions");
   if (modern && r.has("dimension")) {
     r.error("conflicting-attributes",
@@ -68,7 +66,7 @@ void build_tiled(EntityReader& r, Scene& scene) {
             r.find("dimension")->where);
     return;
   }
-  TiledPlane t{*plane, {}, !modern, *alt};
+  TiledPlane t{plane.value_or(Plane{}), {}, !modern, alt.value_or(0)};
   if (modern) {
     for (std::string_view key : {"xdir", "dimensions"})
       if (!r.has(key)) {
@@ -78,7 +76,7 @@ void build_tiled(EntityReader& r, Scene& scene) {
                                                    "': the tiles' frame needs both)");
         return;
       }
-    auto window = read_window(r, *plane);
+    auto window = read_window(r, plane);
     if (!window) return;
     t.tile = *window;
   } else {
@@ -92,6 +90,7 @@ void build_tiled(EntityReader& r, Scene& scene) {
     if (!size) return;
     t.tile = {{1, 0, 0}, (*size)[0], (*size)[1]};
   }
+  if (!plane || !m || !alt) return;
   scene.objects.push_back(r.object(*m, t));
 }
 
@@ -100,9 +99,8 @@ void build_texplane(EntityReader& r, Scene& scene) {
   auto m = r.material("material");
   auto texture = r.texture("texname");
   auto mode = r.integer("mode");
-  if (!plane || !m || !texture || !mode) return;
-  auto window = read_window(r, *plane);
-  if (!window) return;
+  auto window = read_window(r, plane);
+  if (!plane || !m || !texture || !mode || !window) return;
   scene.objects.push_back(r.object(*m, TexPlane{*plane, *window, *texture, *mode}));
 }
 
