@@ -20,6 +20,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct ConnectionState {
+  int fd = -1;
   bool head_complete = false;
   bool close_after = false;
   bool body_failed = false;  // a read of the body timed out, failed or met the end
@@ -225,6 +226,16 @@ bool GuardedServer::empty_header(std::string_view name) {
 
 bool GuardedServer::body_cut_short() { return current && current->body_failed; }
 
+bool GuardedServer::client_gone() {
+  if (!current || current->fd < 0) return false;
+  pollfd p{current->fd, POLLIN, 0};
+  if (::poll(&p, 1, 0) <= 0) return false;
+  if (p.revents & (POLLERR | POLLHUP)) return true;
+  char c;
+  const ssize_t n = ::recv(current->fd, &c, 1, MSG_PEEK | MSG_DONTWAIT);
+  return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
+}
+
 void GuardedServer::close_after(httplib::Response& res) {
   if (current) current->close_after = true;
   res.set_header("Connection", "close");
@@ -253,6 +264,7 @@ bool GuardedServer::process_and_close_socket(socket_t sock) {
   for (size_t left = keep_alive_max_count_; left > 0 && svr_sock_ != INVALID_SOCKET; --left) {
     if (!next_request()) break;
     state = ConnectionState{};
+    state.fd = sock;
     state.head_deadline = Clock::now() + limits_.head_timeout;
     bool connection_closed = false;
     ret = process_request(strm, left == 1, connection_closed, nullptr);

@@ -48,6 +48,10 @@ class GuardedServer : public httplib::Server {
   static bool body_cut_short();
   // This answer is sent without reading the request's body: the connection ends after it.
   static void close_after(httplib::Response& res);
+  // Whether the client of the request being answered has closed its connection (its end of
+  // file is waiting; a pipelined next request is not that): no one will read the answer. A
+  // look, no wait; false off a connection's thread.
+  static bool client_gone();
 
   // After binding: the library listens with a backlog of 5, so a burst of new connections
   // (a lab class submitting at once) meets dropped SYNs and 1 s retries. Listening again on

@@ -97,6 +97,7 @@ HttpApi::HttpApi(Service& service)
     : service_(service),
       server_(ConnectionLimits{64 * 1024, std::chrono::milliseconds(static_cast<long long>(
                                               service.settings().header_timeout * 1000))}) {
+  service_.set_waiter_gone(&GuardedServer::client_gone);
   harden();
   routes();
 }

@@ -116,7 +116,7 @@ std::optional<JobRecord> Service::await(const Slot&, const std::string& id,
     for (;;) {
       auto job = farm_->get(id);
       if (!job || job->version > since_version || is_final(job->state) || stopped() ||
-          std::chrono::steady_clock::now() >= deadline)
+          std::chrono::steady_clock::now() >= deadline || waiter_gone())
         return job;
       std::this_thread::sleep_until(
           std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(100)));
@@ -127,7 +127,7 @@ std::optional<JobRecord> Service::await(const Slot&, const std::string& id,
     auto step = std::min(deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(250));
     auto job = jobs_->watch(id, since_version, step);
     if (!job || job->version > since_version || is_final(job->state) || stopped() ||
-        std::chrono::steady_clock::now() >= deadline)
+        std::chrono::steady_clock::now() >= deadline || waiter_gone())
       return job;
   }
 }
@@ -136,7 +136,7 @@ std::optional<JobRecord> Service::await_final(const Slot& slot, const std::strin
   std::uint64_t seen = 0;
   for (;;) {
     auto job = await(slot, id, seen, std::chrono::steady_clock::time_point::max());
-    if (!job || is_final(job->state) || stopped()) return job;
+    if (!job || is_final(job->state) || stopped() || waiter_gone()) return job;
     seen = job->version;
   }
 }

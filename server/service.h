@@ -140,6 +140,10 @@ class Service {
                                  std::chrono::steady_clock::time_point deadline);
   // await() until the job is final or rendering stops.
   std::optional<JobRecord> await_final(const Slot& slot, const std::string& id);
+  // Whether the client of the request waiting on this thread has gone (the HTTP layer's
+  // answer): await() then returns at its next step, the job as it is, and frees its slot for
+  // a request someone still waits for. The job itself goes on.
+  void set_waiter_gone(bool (*gone)()) { waiter_gone_ = gone; }
 
   // The result PNG of a done job; null when it has expired.
   std::shared_ptr<const std::string> result_png(const JobRecord& job);
@@ -208,6 +212,8 @@ class Service {
   std::vector<Sample> samples_;
   std::atomic<int> streams_{0};
   std::atomic<int> waiters_{0};
+  bool (*waiter_gone_)() = nullptr;
+  bool waiter_gone() const { return waiter_gone_ && waiter_gone_(); }
   LoadGate load_gate_{static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))};
   std::atomic<bool> shutting_down_{false};
   std::atomic<bool> stopped_{false};

@@ -119,7 +119,8 @@ PreparedScene<double> two_objects(double scale) {
   s.width = s.height = 1;
   s.max_dist = std::numeric_limits<double>::infinity();
   s.materials.push_back({V(0), V(0), V(0), 32, 0, false, false});
-  s.spheres.push_back({V{0, 0, -5} * scale, 1 * scale, 0});
+  s.spheres.push_back({V{0, 0, -5} * scale, 1 * scale});
+  s.sphere_materials.push_back(0);
   s.planes.push_back({V{0, 1, 0}, V{0, -1, 0} * scale, 0});
   s.planes.back().point_scale = scale;
   return s;

@@ -460,6 +460,12 @@ TEST(ModelParser, ReportsOutOfRangeCameraValues) {
        "'viewpoint' coordinates must be within ±1e150"},
       {"camera c { pixeldim 800 600 worlddim 8 -6 viewpoint 4 3 5 }", "-6",
        "'worlddim' values must be > 0, got -6"},
+      // A window so small that lengths across it square to 0: it would render black.
+      {"camera c { pixeldim 8 6 worlddim 8e-170 6 viewpoint 4e-170 3e-170 5e-170 }",
+       "8e-170", "'worlddim' values must be from 1e-150 to 1e150 (their squares must fit a "
+                 "double), got 8e-170"},
+      {"camera c { pixeldim 8 6 worlddim 8 2e150 viewpoint 4 3 5 }", "2e150",
+       "'worlddim' values must be from 1e-150 to 1e150"},
   };
   for (const OutOfRange& c : cases) {
     SCOPED_TRACE(c.line);

@@ -1349,6 +1349,52 @@ TEST(ServerCompare, ASceneToRenderNeedsAWaitingSlot) {
   EXPECT_EQ(two->status, 200) << two->body;
 }
 
+// A client that gave up on ?wait=1 frees its waiting slot: with one slot, a second client can
+// wait for its render once the first has hung up, though the first's job still runs.
+TEST(ServerCompare, AWaiterThatHungUpFreesItsSlot) {
+  Settings s = test_settings();
+  s.max_waiting_requests = 1;
+  TestServer server(s);
+  auto c = server.client();
+  std::string id;
+  {
+    RawConnection gone(server.port());
+    const std::string body = kScene;
+    ASSERT_TRUE(gone.send(std::string("POST /render?wait=1&") + kLong +
+                          " HTTP/1.1\r\nHost: x\r\nContent-Type: text/plain\r\n"
+                          "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body));
+    // Its job exists and it holds the slot.
+    const auto deadline = Clock::now() + 10s;
+    while (Clock::now() < deadline) {
+      auto jobs = json_of(c->Get("/jobs"))["jobs"];
+      if (!jobs.empty()) {
+        id = jobs[0]["id"];
+        break;
+      }
+      std::this_thread::sleep_for(10ms);
+    }
+    ASSERT_FALSE(id.empty());
+    auto busy = c->Post("/render?wait=1&spp=1", kScene, "text/plain");
+    ASSERT_TRUE(busy);
+    EXPECT_EQ(busy->get_header_value("X-Wait"), "unavailable");
+  }  // hangs up
+  std::string mine = local_render(kScene, {{"spp", "1"}});
+  std::shared_ptr<httplib::Response> r;
+  const auto deadline = Clock::now() + 10s;
+  do {
+    auto attempt = c->Post("/compare", httplib::MultipartFormDataItems{
+                                           {"scene", kScene, "scene.txt", "text/plain"},
+                                           {"image", mine, "mine.png", "image/png"}});
+    ASSERT_TRUE(attempt);
+    r = std::make_shared<httplib::Response>(*attempt);
+    if (r->status != 503) break;
+    std::this_thread::sleep_for(100ms);
+  } while (Clock::now() < deadline);
+  EXPECT_EQ(r->status, 200) << r->body;
+  EXPECT_EQ(json_of(c->Get("/jobs/" + id))["state"], "running");
+  c->Delete("/jobs/" + id);
+}
+
 TEST(ServerCompare, DifferentSizesAre422) {
   TestServer server;
   auto c = server.client();

@@ -14,7 +14,7 @@ namespace rayfarm {
 
 enum class ValueKind {
   pixel_dims,    // 2 integers >= 1
-  window_dims,   // 2 numbers > 0
+  window_dims,   // 2 numbers from kMinWindow to kMaxLength
   point,         // 3 numbers
   position,      // 3 numbers within ±kMaxLength: where distances are measured from (an eye,
                  // a light, a sphere's centre, a revsurf's base), squared
@@ -33,6 +33,10 @@ enum class ValueKind {
 // tests and the lengths of rays compute, must fit a double (a sphere of radius 1e160 would
 // vanish rather than fill the view, an eye at 1e155 would see nothing).
 inline constexpr double kMaxLength = 1e150;
+// The least size of a window (a camera's worlddim, a finite plane's dimensions, a tile): its
+// square must be a normal double too. A camera 8e-170 wide has pixel rays whose lengths
+// square to 0, and renders black where its twin 8 units wide does not.
+inline constexpr double kMinWindow = 1e-150;
 
 struct AttrSpec {
   std::string_view key;

@@ -102,7 +102,7 @@ bool value_in_range(const AttrSpec& attr, double v) {
   if (!std::isfinite(v)) return false;
   switch (attr.kind) {
     case V::pixel_dims: return v >= 1 && v <= 65535 && v == std::floor(v);
-    case V::window_dims: return v > 0;
+    case V::window_dims: return v >= kMinWindow && v <= kMaxLength;
     case V::positive: return v > 0 && v <= kMaxLength;
     case V::position: return std::abs(v) <= kMaxLength;
     case V::colour:
@@ -122,6 +122,8 @@ std::string value_problem(const AttrSpec& attr, double v) {
       break;
     case V::window_dims:
       if (!(v > 0)) return "values must be > 0";
+      if (v < kMinWindow || v > kMaxLength)
+        return "values must be from 1e-150 to 1e150 (their squares must fit a double)";
       break;
     case V::colour:
       if (v < 0) return "values must be >= 0";

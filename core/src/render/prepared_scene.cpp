@@ -189,14 +189,19 @@ void build_sphere_bvh(PreparedScene<T>& p, int threads, int width) {
   p.bvh_shapes = !p.bvh.empty();
   if (!p.bvh_shapes) p.bvh = build_bvh(ns, sphere_box, build);
   p.bvh_spheres.clear();
+  p.bvh_index.clear();
   if (p.bvh.empty()) return;  // coordinates out of the nodes' range: keep the loop
   p.bvh_spheres.reserve(p.bvh.order.size());
+  p.bvh_index.reserve(p.bvh.order.size());
   const std::int32_t shape_base = p.shape_base();
   for (std::int32_t i : p.bvh.order) {
-    if (i < static_cast<std::int32_t>(ns))
-      p.bvh_spheres.push_back({p.spheres[i].centre, p.spheres[i].radius, i});
-    else
-      p.bvh_spheres.push_back({Vec3<T>(0), T(0), shape_base + (i - static_cast<std::int32_t>(ns))});
+    if (i < static_cast<std::int32_t>(ns)) {
+      p.bvh_spheres.push_back(p.spheres[i]);
+      p.bvh_index.push_back(i);
+    } else {
+      p.bvh_spheres.push_back({Vec3<T>(0), T(0)});
+      p.bvh_index.push_back(shape_base + (i - static_cast<std::int32_t>(ns)));
+    }
   }
 }
 
@@ -465,9 +470,13 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   // Room for all at once, not grown by doubling (which copies the array through every
   // smaller block on the way).
   p.spheres.reserve(scene.count<Sphere>());
-  for (const Object& o : scene.objects)
-    if (const Sphere* s = o.as<Sphere>())
-      p.spheres.push_back({narrow<T>(s->center), narrow<T>(s->radius), o.material});
+  p.sphere_materials.reserve(scene.count<Sphere>());
+  for (const Object& o : scene.objects) {
+    if (const Sphere* s = o.as<Sphere>()) {
+      p.spheres.push_back({narrow<T>(s->center), narrow<T>(s->radius)});
+      p.sphere_materials.push_back(o.material);
+    }
+  }
   for (const Object& o : scene.objects) {
     if (const Plane* pl = o.as<Plane>()) {
       p.planes.push_back({narrow<T>(unit_direction(pl->normal)), narrow<T>(pl->point), o.material});

@@ -69,20 +69,13 @@ void bound_highlight(PreparedMaterial<T>& m) {
   }
 }
 
+// Four coordinates, aligned to their size: a record never straddles two cache lines, and
+// the tests that read them by number (screen bins, light buffers) take one line each. The
+// material, read once a hit is shaded, lies apart (PreparedScene::sphere_materials).
 template <class T>
-struct PreparedSphere {
+struct alignas(4 * sizeof(T)) PreparedSphere {
   Vec3<T> centre;
   T radius;
-  int material;
-};
-
-// A sphere in the hierarchy's leaf order, with its index in the scene (or, where the
-// hierarchy holds the other shapes too, a shape's object number, the rest unused).
-template <class T>
-struct BvhSphere {
-  Vec3<T> centre;
-  T radius;
-  int index;
 };
 
 template <class T>
@@ -128,16 +121,20 @@ struct PreparedScene {
 
   std::vector<PreparedMaterial<T>> materials;
   std::vector<PreparedSphere<T>> spheres;
+  std::vector<int> sphere_materials;  // per sphere
   std::vector<PreparedPlane<T>> planes;
   std::vector<PreparedShape<T>> shapes;  // object numbers after the spheres and planes
   std::vector<PreparedLight<T>> lights;
   Features features;
 
   Bvh bvh;                                // empty: spheres are tested in a plain loop
-  std::vector<BvhSphere<T>> bvh_spheres;  // the spheres in bvh.order
+  // The spheres in bvh.order, and beside them each one's index in the scene (apart, so that
+  // a leaf's records fill whole cache lines).
+  std::vector<PreparedSphere<T>> bvh_spheres;
+  std::vector<std::int32_t> bvh_index;
   // Whether `bvh` holds the other shapes too, numbered after the spheres in bvh.order: an
-  // entry of bvh_spheres whose index is shape_base() or more names that shape's object (its
-  // centre and radius unused). One walk then finds the nearest of both, where two walks each
+  // entry whose bvh_index is shape_base() or more names that shape's object (its sphere
+  // unused). One walk then finds the nearest of both, where two walks each
   // crossed the scene (kinds-mix: 9 and 13 nodes a reflection ray).
   bool bvh_shapes = false;
   ScreenBins screen_bins;                 // empty: primary rays use `bvh`

@@ -214,7 +214,8 @@ class Tracer {
     if (plane.object >= 0) t_max = plane.t;
     Hit<T> best;
     if (walk) {
-      const BvhSphere<T>* spheres = s_.bvh_spheres.data();
+      const PreparedSphere<T>* spheres = s_.bvh_spheres.data();
+      const std::int32_t* indices = s_.bvh_index.data();
       auto limit = [&] { return float_limit_up(best.t < t_max ? best.t : t_max); };
       auto take = [&](T t, int object) {
         if (t > 0 && t <= t_max && best.beaten_by(t, object)) best = {t, object};
@@ -222,17 +223,21 @@ class Tracer {
       if (s_.bvh_shapes) {
         const int shape_base = s_.shape_base();
         bvh_closest(s_.bvh, ray, limit(), [&](std::int32_t first, std::int32_t count) {
-          for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp)
-            take(sp->index < shape_base
-                     ? sphere_t(o, d, sp->centre, sp->radius, sp->index, from)
-                     : shape_t(s_.shapes[sp->index - shape_base], o, d, sp->index, from),
-                 sp->index);
+          for (std::int32_t k = first; k < first + count; ++k) {
+            const PreparedSphere<T>& sp = spheres[k];
+            const int index = indices[k];
+            take(index < shape_base ? sphere_t(o, d, sp.centre, sp.radius, index, from)
+                                    : shape_t(s_.shapes[index - shape_base], o, d, index, from),
+                 index);
+          }
           return limit();
         });
       } else {
         bvh_closest(s_.bvh, ray, limit(), [&](std::int32_t first, std::int32_t count) {
-          for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp)
-            take(sphere_t(o, d, sp->centre, sp->radius, sp->index, from), sp->index);
+          for (std::int32_t k = first; k < first + count; ++k) {
+            const PreparedSphere<T>& sp = spheres[k];
+            take(sphere_t(o, d, sp.centre, sp.radius, indices[k], from), indices[k]);
+          }
           return limit();
         });
       }
@@ -311,18 +316,20 @@ class Tracer {
         shape_blocks(o, d, from, dist, last_blocker))
       return true;
     if (walk) {
-      const BvhSphere<T>* spheres = s_.bvh_spheres.data();
+      const PreparedSphere<T>* spheres = s_.bvh_spheres.data();
+      const std::int32_t* indices = s_.bvh_index.data();
       const int shape_base = s_.bvh_shapes ? s_.shape_base() : std::numeric_limits<int>::max();
       return bvh_any(
           s_.bvh, ray, float_limit_up(dist), [&](std::int32_t first, std::int32_t count) {
-            for (const BvhSphere<T>* sp = spheres + first; sp != spheres + first + count; ++sp) {
-              if (sp->index >= shape_base) {
-                if (shape_blocks_one(sp->index - shape_base, o, d, from, dist))
-                  return remember(last_blocker, sp->index);
+            for (std::int32_t k = first; k < first + count; ++k) {
+              const int index = indices[k];
+              if (index >= shape_base) {
+                if (shape_blocks_one(index - shape_base, o, d, from, dist))
+                  return remember(last_blocker, index);
                 continue;
               }
-              const T t = sphere_t(o, d, sp->centre, sp->radius, sp->index, from);
-              if (t > 0 && t < dist) return remember(last_blocker, sp->index);
+              const T t = sphere_t(o, d, spheres[k].centre, spheres[k].radius, index, from);
+              if (t > 0 && t < dist) return remember(last_blocker, index);
             }
             return false;
           });
@@ -418,7 +425,7 @@ class Tracer {
 
   int material_of(int object) const {
     const int ns = s_.plane_base(), np = static_cast<int>(s_.planes.size());
-    if (object < ns) return s_.spheres[object].material;
+    if (object < ns) return s_.sphere_materials[object];
     if (object < ns + np) return s_.planes[object - ns].material;
     return s_.shapes[object - ns - np].material;
   }
@@ -454,7 +461,7 @@ class Tracer {
       s.n = p - sp.centre;
       T nl = glm::length(s.n);
       s.n = nl > 0 ? s.n / nl : -dir;
-      material = sp.material;
+      material = s_.sphere_materials[object];
     } else if (object < ns + np) {
       const PreparedPlane<T>& pl = s_.planes[object - ns];
       s.n = pl.normal;
