@@ -256,6 +256,9 @@ local function heartbeat(_, a)
   local P, node, ttl = a[1], a[2], tonumber(a[3])
   redis.call('SET', P .. 'node:' .. node, a[4], 'PX', ttl)
   redis.call('ZADD', P .. 'nodes', now_ms(), node)
+  -- How long this node may go between renewals (its heartbeat's TTL): what the janitor must
+  -- wait at least before it takes this node's units, whatever its own --lease-ms.
+  redis.call('HSET', P .. 'renewal', node, ttl)
   if #a < 5 then return {} end
   local ids = {}
   for i = 5, #a do ids[#ids + 1] = a[i] end
@@ -331,9 +334,19 @@ end
 -- ARGV: P, janitor, lease_ms, max_tries, cursor, count -> {next_cursor, requeued, failed}
 -- Entries idle past the lease belong to a node that died or stalled: requeue them with try+1
 -- (so any idle node takes them at once), or fail the job once a unit was abandoned max_tries
--- times (a unit that kills every node it lands on must not crash-loop the farm).
+-- times (a unit that kills every node it lands on must not crash-loop the farm). The lease is
+-- the janitor's, or longer where a live node renews less often than that (nodes started
+-- with other --heartbeat-ms than the janitor's: their units are not taken while they live).
 local function reclaim(_, a)
-  local P, jan, lease, max_tries = a[1], a[2], a[3], tonumber(a[4])
+  local P, jan, lease, max_tries = a[1], a[2], tonumber(a[3]), tonumber(a[4])
+  local renewal = redis.call('HGETALL', P .. 'renewal')
+  for i = 1, #renewal, 2 do
+    if redis.call('EXISTS', P .. 'node:' .. renewal[i]) == 1 then
+      lease = math.max(lease, tonumber(renewal[i + 1]) or 0)
+    else
+      redis.call('HDEL', P .. 'renewal', renewal[i])
+    end
+  end
   local r = redis.call('XAUTOCLAIM', P .. 'work', G, jan, lease, a[5], 'COUNT', a[6])
   local requeued, failed = 0, 0
   for _, e in ipairs(r[2]) do

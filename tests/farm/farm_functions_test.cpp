@@ -173,7 +173,14 @@ TEST_F(FarmFunctions, HeartbeatRenewsTheLeaseAndReportsItsLoss) {
   EXPECT_EQ(deliveries, 1);  // JUSTID: a renewal is not a delivery
   EXPECT_EQ(integer({"EXISTS", prefix_ + "node:n1"}), 1);
 
+  // A janitor of a shorter lease waits for a live node's renewal (its heartbeat's 3 s): nodes
+  // started with other --heartbeat-ms lose no unit while they live.
   std::this_thread::sleep_for(60ms);
+  auto kept = n->reclaim("janitor", 50ms);
+  ASSERT_TRUE(kept) << kept.error().message;
+  EXPECT_EQ(kept->requeued, 0);
+  // Once the node is gone, its unit goes back after the janitor's own lease.
+  ASSERT_TRUE(raw().command({"DEL", prefix_ + "node:n1"}));
   auto r = n->reclaim("janitor", 50ms);
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_EQ(r->requeued, 1);
