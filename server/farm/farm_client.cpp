@@ -80,6 +80,11 @@ Status FarmSetup::on_connect(Connection& c) {
   if (epoch_.empty()) {
     epoch_ = joined->epoch;
   } else if (epoch_ != joined->epoch) {
+    // Redis lost the farm's state (restarted empty, FLUSHALL): jobs it held are gone.
+    std::fprintf(stderr,
+                 "rayfarmd: the farm's Redis lost its state (epoch %s, was %s): jobs it held "
+                 "answer 404 and must be submitted again\n",
+                 joined->epoch.substr(0, 8).c_str(), epoch_.substr(0, 8).c_str());
     epoch_ = joined->epoch;
     ++epoch_changes_;
   }

@@ -105,6 +105,7 @@ Status Connection::connect() {
   auto fail = [this](Error e) -> Status {
     connecting_ = false;
     if (e.outcome_unknown()) e.kind = ErrorKind::Unavailable;
+    if (setup_error(e.kind)) refused_ = e.message;
     if (ctx_) {  // an error reply; a lost connection was already dropped and scheduled
       disconnect();
       schedule_retry();
@@ -125,6 +126,7 @@ Status Connection::connect() {
     if (auto s = options_.on_connect(*this); !s) return fail(s.error());
   connecting_ = false;
   failures_ = 0;
+  refused_.clear();
   ++connects_;
   return Ok{};
 }
@@ -136,6 +138,11 @@ Status Connection::ensure_connected() {
   const auto now = Clock::now();
   if (failures_ > 0 && now < next_attempt_) {
     const auto wait = std::chrono::duration_cast<milliseconds>(next_attempt_ - now).count();
+    // Refused at setup (another build, a wrong password): that reason, not "unavailable".
+    if (!refused_.empty())
+      return Error{ErrorKind::Unavailable, "the farm at " + options_.url.to_string() +
+                                               " refused this node: " + refused_ +
+                                               "; next attempt in " + std::to_string(wait) + " ms"};
     return Error{ErrorKind::Unavailable, "Redis at " + options_.url.to_string() +
                                              " is unavailable; next attempt in " +
                                              std::to_string(wait) + " ms"};

@@ -108,6 +108,7 @@ class Connection {
   int failures_ = 0;
   std::chrono::steady_clock::time_point next_attempt_{};
   std::uint64_t connects_ = 0;
+  std::string refused_;  // the last setup error (Build, Auth, ...) until a connect succeeds
   std::minstd_rand jitter_;
 };
 

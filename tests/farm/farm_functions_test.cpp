@@ -471,6 +471,12 @@ TEST_F(FarmFunctions, ANodeOfAnotherBuildIsRefused) {
   EXPECT_EQ(s.error().kind, ErrorKind::Build);
   EXPECT_NE(s.error().message.find("this farm runs build test-build"), std::string::npos);
   EXPECT_FALSE(stranger.conn->wait_connected(200ms));  // a setup error: no retry loop
+  // While it waits for its next attempt, it says why it was refused, not "unavailable".
+  Status again = stranger.conn->ensure_connected();
+  ASSERT_FALSE(again);
+  EXPECT_NE(again.error().message.find("refused this node: this farm runs build test-build"),
+            std::string::npos)
+      << again.error().message;
 }
 
 TEST_F(FarmFunctions, AReconnectNoticesALostEpoch) {
