@@ -5,6 +5,8 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cstdlib>
+#include <memory>
 #include <cstdio>
 #include <iostream>
 #include <thread>
@@ -18,7 +20,35 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 std::atomic<bool> interrupted{false};
+std::atomic<bool> interrupt_handled{false};
 void on_sigint(int) { interrupted = true; }
+
+// Ctrl-C while a read waits on a silent server (an event stream with nothing to say, an image
+// that stalls): the reads see the flag only when bytes come. A watchdog gives them a moment,
+// then cancels the job itself (waiting at most two seconds for the answer) and ends the
+// program with 130; nothing has been written by then (an image is saved only once whole).
+void start_watchdog(const Remote& remote, const std::string& id) {
+  std::thread([remote, id] {
+    while (!interrupted) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    for (int i = 0; i < 10 && !interrupt_handled; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (interrupt_handled.exchange(true)) return;  // the reads saw it: theirs to cancel
+    auto said = std::make_shared<std::atomic<bool>>(false);
+    std::thread([remote, id, said] {
+      auto res = remote.client()->del("/jobs/" + id, remote.headers());
+      if (said->exchange(true)) return;
+      std::cerr << "\nrayfarm: interrupted; "
+                << (res && res->status == 200 ? "canceled job " : "could not cancel job ") << id
+                << "\n";
+      std::_Exit(kInterrupted);
+    }).detach();
+    std::this_thread::sleep_for(std::chrono::seconds(2));
+    if (said->exchange(true)) return;
+    std::cerr << "\nrayfarm: interrupted; the server did not answer the cancel of job " << id
+              << "\n";
+    std::_Exit(kInterrupted);
+  }).detach();
+}
 
 bool is_final(const std::string& state) {
   return state == "done" || state == "failed" || state == "canceled";
@@ -151,9 +181,14 @@ StreamEnd read_events(const Remote& remote, const std::string& id, RemoteBar& ba
 
 std::optional<nlohmann::json> follow_job(const Remote& remote, const std::string& id, bool quiet,
                                          bool cancel_on_interrupt, int& exit_code) {
-  if (cancel_on_interrupt) std::signal(SIGINT, on_sigint);
+  if (cancel_on_interrupt) {
+    std::signal(SIGINT, on_sigint);
+    start_watchdog(remote, id);
+  }
   RemoteBar bar(id, quiet);
   auto cancel = [&]() -> std::optional<nlohmann::json> {
+    // (the watchdog took it: it ends the program)
+    if (interrupt_handled.exchange(true)) std::this_thread::sleep_for(std::chrono::hours(1));
     bar.end();
     auto res = remote.client()->del("/jobs/" + id, remote.headers());
     std::cerr << "rayfarm: interrupted; "

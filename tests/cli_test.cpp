@@ -1296,6 +1296,45 @@ TEST_F(RemoteCli, AnswersOfTheWrongShapeAreTheServersFailure) {
   EXPECT_NE(token.out.find("the token holds"), std::string::npos) << token.out;
 }
 
+// Ctrl-C while the server says nothing (an event stream kept open and silent): the job is
+// canceled and the program ends with 130 within a moment, not at the read timeout.
+TEST_F(RemoteCli, CtrlCEndsAFollowOnASilentServer) {
+  REQUIRE_CLIENT();
+  const std::string id(32, 'c');
+  std::atomic<bool> deleted{false};
+  rayfarm::test::HostileServer server([&](rayfarm::test::HostileServer& s, int fd,
+                                          const std::string& request) {
+    auto answer = [&](const std::string& status, const std::string& body) {
+      s.send(fd, "HTTP/1.1 " + status + "\r\nConnection: close\r\nContent-Type: "
+                 "application/json\r\nContent-Length: " + std::to_string(body.size()) +
+                 "\r\n\r\n" + body);
+    };
+    if (request.rfind("POST /render", 0) == 0) {
+      char drain[4096];  // the scene, so that closing sends no reset before the answer
+      while (::recv(fd, drain, sizeof drain, MSG_DONTWAIT) > 0) {
+      }
+      answer("202 Accepted", R"({"id":")" + id + R"(","state":"queued"})");
+    } else if (request.rfind("DELETE /jobs/" + id, 0) == 0) {
+      deleted = true;
+      answer("200 OK", R"({"id":")" + id + R"(","state":"canceled"})");
+    } else if (request.find("/events") != std::string::npos) {
+      if (!s.send(fd, "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\n\r\n")) return;
+      for (int i = 0; i < 600 && !deleted; ++i)  // open and silent until the cancel
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  });
+  ASSERT_FALSE(server.url().empty());
+  const auto start = std::chrono::steady_clock::now();
+  Outcome r = run("sh -c '" + kRayfarm + " render -q " + scene_ + " --server " + server.url() +
+                  " -o " + out("c.png") + " & pid=$!; sleep 1.5; kill -INT $pid; wait $pid; "
+                  "echo \\\"exit $?\\\"' 2>&1");
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(15)) << r.out;
+  EXPECT_NE(r.out.find("exit 130"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("interrupted; canceled job " + id), std::string::npos) << r.out;
+  EXPECT_TRUE(deleted);
+  EXPECT_FALSE(fs::exists(dir_ / "c.png"));
+}
+
 // docs/cli.md keeps up with --help: every option a command offers is in its section, and every
 // render option in the table of render options.
 TEST(DocsCli, EveryOptionOfEveryCommandIsDocumented) {
