@@ -180,6 +180,10 @@ void OptionFlags::add_to(CLI::App& app, const std::map<std::string, std::string>
              RenderOptions probe;
              if (auto bad = apply_option(probe, name, v))
                throw CLI::ValidationError("--" + dashed, *bad);
+             // ("" is how the default prints; given, it names no camera: "$CAM" unset)
+             if (name == "camera" && v.empty())
+               throw CLI::ValidationError("--camera", "must be a camera name (leave --camera "
+                                                      "out for the scene's first)");
              values[name] = v;
            },
            help)

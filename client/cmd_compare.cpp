@@ -60,6 +60,10 @@ Runner add_compare(CLI::App& app) {
           std::cerr << "rayfarm: --diff: " << bad << "\n";
           return kBadInput;
         }
+    if (args->a == "-" && args->b == "-") {
+      std::cerr << "rayfarm: standard input is read once: give at most one of the images as -\n";
+      return kBadInput;
+    }
     std::optional<Image> images[2];
     const std::string* names[2] = {&args->a, &args->b};
     for (int i = 0; i < 2; ++i) {

@@ -157,11 +157,14 @@ Runner add_render(CLI::App& app) {
       // What `check` would warn about (a sphere behind the eye, a light inside an object):
       // a black image with no word is the worst answer to such a scene. Its errors (an image
       // too large) are said with their place whatever --quiet says, and stop here.
+      // (A camera the scene lacks is the render's error, said once, not also as a warning.)
       Diagnostics lints;
-      if (args->quiet)
-        lint_image_size(*loaded->scene, *options, lints);
-      else
-        lint_scene(*loaded->scene, *options, lints);
+      if (loaded->scene->find_camera(options->camera)) {
+        if (args->quiet)
+          lint_image_size(*loaded->scene, *options, lints);
+        else
+          lint_scene(*loaded->scene, *options, lints);
+      }
       for (const Diagnostic& d : lints.items())
         std::cerr << format_diagnostic(d, display_name(args->scene), *text);
       if (lints.has_errors()) return kBadInput;

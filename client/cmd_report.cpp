@@ -52,6 +52,7 @@ Runner add_report(CLI::App& app) {
       "--reference-spp";
   args->flags.add_to(app, {{"spp", ladder},
                            {"format", "report writes report.md, report.csv and report.svg"},
+                           {"priority", "priority is a server's queue class; report runs here"},
                            {"target_error", ladder + ", each to the end"},
                            {"time_limit", ladder + ", each to the end"}});
   app.footer(help_footer(

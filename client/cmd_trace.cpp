@@ -43,6 +43,7 @@ Runner add_trace(CLI::App& app) {
       "trace follows a set number of samples; give the --spp the render reached (its summary "
       "line says spp N/M)";
   args->flags.add_to(app, {{"format", "trace prints the pixel's bytes, not an image"},
+                           {"priority", "priority is a server's queue class; trace runs here"},
                            {"target_error", stop_rule},
                            {"time_limit", stop_rule}});
   app.footer(

@@ -32,8 +32,13 @@ std::string size_of(const nlohmann::json& status) {
 // "19/64" while rendering, "64" when all were done.
 std::string spp_of(const nlohmann::json& status) {
   const auto& o = options_of(status);
-  const int done = status.value("spp_done", 0);
-  const int asked = o.contains("spp") && o["spp"].is_number_integer() ? o["spp"].get<int>() : 0;
+  // (64-bit: a hostile server's 2^40 must not wrap to a negative number)
+  const auto done =
+      status.contains("spp_done") && status["spp_done"].is_number_integer()
+          ? status["spp_done"].get<long long>()
+          : 0LL;
+  const auto asked =
+      o.contains("spp") && o["spp"].is_number_integer() ? o["spp"].get<long long>() : 0LL;
   if (asked == 0 || done == asked) return std::to_string(done);
   return std::to_string(done) + "/" + std::to_string(asked);
 }

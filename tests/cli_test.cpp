@@ -817,6 +817,23 @@ TEST(ConvertCli, AConvertedSceneElsewhereSaysWhereItsTexturesMustGo) {
   EXPECT_EQ(plain.out, "") << "no textures, no note";
 }
 
+// What a command cannot use is refused, not ignored: a queue class where nothing is queued,
+// an empty camera name (not "the first"), standard input as both images.
+TEST(Cli, OptionsACommandCannotUseAreRefused) {
+  REQUIRE_CLIENT();
+  const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/cho.txt");
+  for (const auto& [command, says] : std::vector<std::pair<std::string, std::string>>{
+           {" trace " + scene + " 1 1 --priority batch", "--priority: priority is a server's"},
+           {" report " + scene + " --out /tmp/never --priority batch", "--priority"},
+           {" render " + scene + " --camera '' -o /tmp/never.png", "--camera: must be a camera"},
+           {" compare - - < /dev/null", "standard input is read once"}}) {
+    Outcome r = run(kRayfarm + command + " 2>&1");
+    EXPECT_EQ(r.code, 2) << command << r.out;
+    EXPECT_NE(r.out.find(says), std::string::npos) << command << r.out;
+  }
+  EXPECT_FALSE(fs::exists("/tmp/never.png"));
+}
+
 // `-o "$OUT"` with OUT unset is a mistake to say, not a reason to write elsewhere.
 TEST(Cli, AnEmptyFileNameIsRefused) {
   REQUIRE_CLIENT();
