@@ -157,6 +157,18 @@ void HttpApi::harden() {
     // gave up instead.
     if (!req.has_header("Content-Length") && !req.has_header("Transfer-Encoding"))
       const_cast<Request&>(req).headers.emplace("Content-Length", "0");
+    // A media type is case-insensitive (RFC 9110 §8.3.1), but this cpp-httplib matches
+    // "multipart/form-data" as written: the type is given in lower case (the boundary, a
+    // parameter whose case counts, as sent).
+    if (const std::string type = req.get_header_value("Content-Type"); !type.empty()) {
+      const size_t semi = std::min(type.find(';'), type.size());
+      const std::string lowered = lower_ascii(type.substr(0, semi)) + type.substr(semi);
+      if (lowered != type) {
+        auto& headers = const_cast<Request&>(req).headers;  // the library's own object
+        headers.erase("Content-Type");
+        headers.emplace("Content-Type", lowered);
+      }
+    }
     // curl --data-binary labels a scene as a urlencoded form; this cpp-httplib would then
     // parse the scene as query parameters and refuse bodies over 8 KiB. A scene is text.
     if (req.get_header_value("Content-Type").rfind("application/x-www-form-urlencoded", 0) == 0) {

@@ -1,5 +1,7 @@
 // The web page: GET / for browsers (curl and scripts still get the JSON index) and
 // GET /web/NAME for its scripts and styles, all built into the binary (web_files.h).
+#include <cctype>
+
 #include "http_util.h"
 #include "routes.h"
 #include "web_files.h"
@@ -38,7 +40,9 @@ void send_web_file(const Request& req, Response& res, const WebFile& file) {
 }  // namespace
 
 bool wants_page(const Request& req) {
-  return req.get_header_value("Accept").find("text/html") != std::string::npos;
+  std::string accept = req.get_header_value("Accept");  // media types: any case
+  for (char& c : accept) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return accept.find("text/html") != std::string::npos;
 }
 
 void get_page(Service&, const Request& req, Response& res) {

@@ -483,6 +483,19 @@ TEST(JsonScene, ReportsNumbersJsonCannotHoldAsSyntaxErrors) {
   }
 }
 
+// A JSON scene's tree takes some 30 times its text: past 128 MiB it is refused unread.
+TEST(JsonScene, RefusesAJsonSceneTooLargeToHold) {
+  std::string text = "{\"objects\": [" + std::string(kMaxJsonSceneBytes, ' ') + "]}";
+  Diagnostic d = single_error(text);
+  EXPECT_EQ(d.code, "json-size");
+  EXPECT_NE(d.message.find("over the limit of 128 MiB"), std::string::npos) << d.message;
+  // At the limit it is read (and this one is merely empty of cameras).
+  text.resize(kMaxJsonSceneBytes - 2);
+  text += "]}";
+  LoadedScene loaded = load_scene(text);
+  for (const Diagnostic& e : loaded.diags.items()) EXPECT_NE(e.code, "json-size");
+}
+
 TEST(JsonScene, ReportsDeepNestingCleanly) {
   auto start = std::chrono::steady_clock::now();
   const int n = 100000;

@@ -410,6 +410,19 @@ TEST(ServerRender, MultipartScenePartIsAccepted) {
   ASSERT_EQ(r->status, 200) << r->body;
   EXPECT_EQ(r->body, local_render(kScene, {{"spp", "2"}}));
 
+  // Media types in any case (RFC 9110 §8.3.1); the boundary as sent.
+  const std::string body = "--XyZ\r\nContent-Disposition: form-data; name=\"scene\"; "
+                           "filename=\"s.txt\"\r\n\r\n" + std::string(kScene) + "\r\n--XyZ--\r\n";
+  auto cased = c->Post("/render?wait=1&spp=2", body, "Multipart/Form-Data; boundary=XyZ");
+  ASSERT_TRUE(cased);
+  EXPECT_EQ(cased->status, 200) << cased->body;
+  auto identity = c->Post("/check", {{"Content-Encoding", "Identity"}}, kScene, "text/plain");
+  ASSERT_TRUE(identity);
+  EXPECT_EQ(identity->status, 200) << identity->body;
+  auto page = c->Get("/", {{"Accept", "TEXT/HTML"}});
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->get_header_value("Content-Type"), "text/html; charset=utf-8");
+
   httplib::MultipartFormDataItems wrong = {{"model", kScene, "scene.txt", "text/plain"}};
   auto bad = c->Post("/render", wrong);
   ASSERT_TRUE(bad);

@@ -14,6 +14,10 @@ namespace rayfarm {
 
 enum class SceneFormat { model, json };
 
+// The largest JSON scene read: a document tree takes some 30 times its text in memory (a
+// model file of the same scene, a fraction of that), so 128 MiB of JSON is a few GiB.
+inline constexpr size_t kMaxJsonSceneBytes = size_t{128} << 20;
+
 // JSON when the first non-blank character is '{' (or '[' or '"', which begin no model
 // file), a model file otherwise.
 SceneFormat detect_format(std::string_view text);

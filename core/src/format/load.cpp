@@ -82,6 +82,14 @@ LoadedScene load_scene(std::string_view text, LoadDetail detail,
     return out;
   }
   const SceneFormat format = detect_format(text);
+  if (format == SceneFormat::json && text.size() > kMaxJsonSceneBytes) {
+    out.diags.error("json-size",
+                    "a JSON scene of " + std::to_string(text.size() >> 20) +
+                        " MiB is over the limit of 128 MiB (reading JSON takes some 30 times its "
+                        "size in memory): write the scene as a model file",
+                    Where{});
+    return out;
+  }
   if (detail == LoadDetail::scene && format == SceneFormat::model) {
     out.scene = load_model_fast(text);
     if (out.scene) return out;  // the fast path reads no kind that has textures
