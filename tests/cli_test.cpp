@@ -884,6 +884,26 @@ TEST(ReportCli, TheSppLadderStopsBelowTheReference) {
   }
   EXPECT_GT(spp_rows, 0);
   fs::remove_all(out);
+  // A reference of 2 samples: the depth and bailout sweeps take 2, not 16 (their error would
+  // be the reference's noise). The scene has no reflection: every row is the reference.
+  Outcome two = run(kRayfarm + " report " + q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt") +
+                    " -q --runs 1 --max-pixels 200 --reference-spp 2 --out " + q(out.string()) +
+                    " 2>&1 >/dev/null");
+  EXPECT_EQ(two.code, 0) << two.out;
+  std::ifstream csv2(out / "report.csv");
+  std::getline(csv2, header);
+  const size_t rmse = std::find(names.begin(), names.end(), "rmse") - names.begin();
+  ASSERT_LT(rmse, names.size()) << header;
+  int swept = 0;
+  while (std::getline(csv2, line)) {
+    const auto cells = columns(line);
+    if (cells.at(sweep) == "spp") continue;
+    ++swept;
+    EXPECT_EQ(cells.at(spp), "2") << line;
+    EXPECT_EQ(std::stod(cells.at(rmse)), 0.0) << line;
+  }
+  EXPECT_GT(swept, 0);
+  fs::remove_all(out);
 }
 
 TEST(RayfarmdCli, ABadValueFromTheEnvironmentNamesTheVariable) {

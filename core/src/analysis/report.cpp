@@ -80,18 +80,21 @@ Report run_report(const Scene& scene, const std::string& scene_name, const Rende
       settings_list.push_back(o);
       sweeps.push_back("spp");
     }
+  // The depth and bailout sweeps at 16 samples, or the reference's if it has fewer: against
+  // a reference of fewer samples, the difference would be the reference's noise.
+  const int sweep_spp = std::min(16, std::max(1, settings.reference_spp));
   for (int d : settings.depths) {
     if (d == base.effective_max_depth()) continue;  // already in the spp sweep
     RenderOptions o = sized;
     o.max_depth = d;
-    o.spp = 16;
+    o.spp = sweep_spp;
     settings_list.push_back(o);
     sweeps.push_back("max_depth");
   }
   for (double b : settings.bailouts) {
     RenderOptions o = sized;
     o.bailout = b;
-    o.spp = 16;
+    o.spp = sweep_spp;
     settings_list.push_back(o);
     sweeps.push_back("bailout");
   }
