@@ -310,9 +310,9 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
     }
   // A framing header with an empty value is dropped by the library, which then reads no
   // body: the bytes sent as one would be read as the next request.
-  for (const char* name : {"Content-Length", "Transfer-Encoding", "Content-Encoding"})
+  for (const std::string_view name : {"Content-Length", "Transfer-Encoding", "Content-Encoding"})
     if (GuardedServer::empty_header(name)) {
-      send_error(res, 400, name[8] == 'L' ? "bad_content_length" : "bad_header",
+      send_error(res, 400, name == "Content-Length" ? "bad_content_length" : "bad_header",
                  "the request's " + std::string(name) + " header is empty");
       GuardedServer::close_after(res);
       return true;

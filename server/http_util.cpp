@@ -170,8 +170,8 @@ ApiError ambiguous_query(std::string_view target) {
       const std::string name =
           httplib::detail::decode_url(std::string(piece.substr(0, eq)), true);
       if (!names.insert(name).second) {
-        ApiError e =
-            api_error(400, "invalid_option", "'" + name.substr(0, 64) + "' is given more than once");
+        ApiError e = api_error(400, "invalid_option",
+                               "'" + name.substr(0, 64) + "' is given more than once");
         e.path = name.substr(0, 64);
         return e;
       }

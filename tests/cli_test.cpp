@@ -1356,6 +1356,7 @@ TEST_F(RemoteCli, CtrlCEndsAFollowOnASilentServer) {
       answer("200 OK", R"({"id":")" + id + R"(","state":"canceled"})");
     } else if (request.find("/events") != std::string::npos) {
       if (!s.send(fd, "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\n\r\n")) return;
+      std::ofstream(dir_ / "following");  // the program follows: Ctrl-C may come now
       for (int i = 0; i < 600 && !deleted; ++i)  // open and silent until the cancel
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
@@ -1363,7 +1364,8 @@ TEST_F(RemoteCli, CtrlCEndsAFollowOnASilentServer) {
   ASSERT_FALSE(server.url().empty());
   const auto start = std::chrono::steady_clock::now();
   Outcome r = run("sh -c '" + kRayfarm + " render -q " + scene_ + " --server " + server.url() +
-                  " -o " + out("c.png") + " & pid=$!; sleep 1.5; kill -INT $pid; wait $pid; "
+                  " -o " + out("c.png") + " & pid=$!; while [ ! -e " + out("following") +
+                  " ]; do sleep 0.1; done; sleep 0.3; kill -INT $pid; wait $pid; "
                   "echo \\\"exit $?\\\"' 2>&1");
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(15)) << r.out;
   EXPECT_NE(r.out.find("exit 130"), std::string::npos) << r.out;

@@ -1404,7 +1404,9 @@ TEST(ServerCompare, AWaiterThatHungUpFreesItsSlot) {
     std::this_thread::sleep_for(100ms);
   } while (Clock::now() < deadline);
   EXPECT_EQ(r->status, 200) << r->body;
-  EXPECT_EQ(json_of(c->Get("/jobs/" + id))["state"], "running");
+  // The job itself goes on (queued behind the reference, or rendering: a slow host decides).
+  const std::string state = json_of(c->Get("/jobs/" + id))["state"];
+  EXPECT_TRUE(state == "queued" || state == "running") << state;
   c->Delete("/jobs/" + id);
 }
 

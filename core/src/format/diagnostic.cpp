@@ -124,7 +124,9 @@ std::string format_diagnostic(const Diagnostic& d, std::string_view file_name,
     if (text.size() > kLongLine) {
       size_t from = upto > kAround ? upto - kAround : 0;
       size_t to = std::min(text.size(), upto + kAround);
-      auto continuation = [&](size_t i) { return (static_cast<unsigned char>(text[i]) & 0xC0) == 0x80; };
+      auto continuation = [&](size_t i) {
+        return (static_cast<unsigned char>(text[i]) & 0xC0) == 0x80;
+      };
       while (from > 0 && continuation(from)) --from;  // whole UTF-8 characters only
       while (to < text.size() && continuation(to)) ++to;
       cut_left = from > 0;
