@@ -49,17 +49,7 @@ int check_file(const std::string& path, bool quiet, bool course, Tally& total) {
       std::cerr << name << ": note: --course applies to model files only\n";
     }
   }
-  {  // in the order of the file (a JSON scene's by where their paths lie)
-    const std::vector<size_t> place = places_in_text(*text, all);
-    std::vector<size_t> order(all.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(),
-                     [&](size_t a, size_t b) { return place[a] < place[b]; });
-    std::vector<Diagnostic> sorted;
-    sorted.reserve(all.size());
-    for (size_t i : order) sorted.push_back(std::move(all[i]));
-    all = std::move(sorted);
-  }
+  in_file_order(*text, all);  // a JSON scene's by where their paths lie
   size_t warnings = 0;
   for (const Diagnostic& d : all) {
     std::cerr << format_diagnostic(d, name, *text);

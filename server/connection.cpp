@@ -1,6 +1,8 @@
 // The connection loop and socket stream of GuardedServer.
 #include "connection.h"
 
+#include "socket_peer.h"
+
 #include <netdb.h>
 #include <poll.h>
 #include <sys/socket.h>
@@ -121,11 +123,7 @@ class SocketStream final : public httplib::Stream {
 
   // Writable and the peer still there (a departed event-stream client is noticed here).
   bool is_writable() const override {
-    if (poll_for(fd_, POLLOUT, write_timeout_ms_) <= 0) return false;
-    if (poll_for(fd_, POLLIN, 0) <= 0) return true;
-    char c;
-    ssize_t n = ::recv(fd_, &c, 1, MSG_PEEK | MSG_DONTWAIT);
-    return n > 0 || (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK));
+    return poll_for(fd_, POLLOUT, write_timeout_ms_) > 0 && !farm::socket_closed_by_peer(fd_);
   }
 
   ssize_t read(char* ptr, size_t size) override {
@@ -226,15 +224,7 @@ bool GuardedServer::empty_header(std::string_view name) {
 
 bool GuardedServer::body_cut_short() { return current && current->body_failed; }
 
-bool GuardedServer::client_gone() {
-  if (!current || current->fd < 0) return false;
-  pollfd p{current->fd, POLLIN, 0};
-  if (::poll(&p, 1, 0) <= 0) return false;
-  if (p.revents & (POLLERR | POLLHUP)) return true;
-  char c;
-  const ssize_t n = ::recv(current->fd, &c, 1, MSG_PEEK | MSG_DONTWAIT);
-  return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
-}
+bool GuardedServer::client_gone() { return current && farm::socket_closed_by_peer(current->fd); }
 
 void GuardedServer::close_after(httplib::Response& res) {
   if (current) current->close_after = true;

@@ -1376,17 +1376,18 @@ TEST(ServerCompare, AWaiterThatHungUpFreesItsSlot) {
     ASSERT_TRUE(gone.send(std::string("POST /render?wait=1&") + kLong +
                           " HTTP/1.1\r\nHost: x\r\nContent-Type: text/plain\r\n"
                           "Content-Length: " + std::to_string(body.size()) + "\r\n\r\n" + body));
-    // Its job exists and it holds the slot.
+    // Its job exists and it holds the slot (taken once the job is submitted).
     const auto deadline = Clock::now() + 10s;
-    while (Clock::now() < deadline) {
+    bool waiting = false;
+    while (Clock::now() < deadline && !(waiting && !id.empty())) {
       auto jobs = json_of(c->Get("/jobs"))["jobs"];
-      if (!jobs.empty()) {
-        id = jobs[0]["id"];
-        break;
-      }
+      if (!jobs.empty()) id = jobs[0]["id"];
+      auto m = c->Get("/metrics");
+      waiting = m && m->body.find("\nrayfarm_waiting_requests 1\n") != std::string::npos;
       std::this_thread::sleep_for(10ms);
     }
     ASSERT_FALSE(id.empty());
+    ASSERT_TRUE(waiting);
     auto busy = c->Post("/render?wait=1&spp=1", kScene, "text/plain");
     ASSERT_TRUE(busy);
     EXPECT_EQ(busy->get_header_value("X-Wait"), "unavailable");

@@ -1,4 +1,5 @@
 #include "redis_connection.h"
+#include "socket_peer.h"
 
 #include <hiredis.h>
 #include <poll.h>
@@ -41,15 +42,7 @@ void Connection::disconnect() {
   ctx_ = nullptr;
 }
 
-bool Connection::closed_by_peer() const {
-  if (!ctx_ || ctx_->fd < 0) return false;
-  pollfd p{ctx_->fd, POLLIN, 0};
-  if (::poll(&p, 1, 0) <= 0) return false;
-  if (p.revents & (POLLERR | POLLHUP)) return true;
-  char byte;
-  const ssize_t n = ::recv(ctx_->fd, &byte, 1, MSG_PEEK | MSG_DONTWAIT);
-  return n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR);
-}
+bool Connection::closed_by_peer() const { return ctx_ && socket_closed_by_peer(ctx_->fd); }
 
 Error Connection::context_error(const char* what) {
   const int saved_errno = errno;

@@ -28,6 +28,9 @@ struct Diagnostic {
 };
 
 // Collects diagnostics up to a cap, so a garbage file cannot produce megabytes of errors.
+// Puts `ds` in the order of `place` (one per item, in ds's order), ties as they were.
+void sort_by_place(std::vector<Diagnostic>& ds, const std::vector<size_t>& place);
+
 class Diagnostics {
  public:
   static constexpr size_t kMaxErrors = 50;
@@ -40,8 +43,7 @@ class Diagnostics {
   bool truncated() const { return truncated_; }
   const std::vector<Diagnostic>& items() const { return items_; }
   const Diagnostic* first_error() const;
-  // Puts the items in the order of `place` (one per item, as items() lists them), ties as
-  // they were.
+  // sort_by_place on the items.
   void reorder(const std::vector<size_t>& place);
 
   // A reader that stops once past the cap (the model parser: a garbage file is not worth

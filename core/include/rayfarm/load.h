@@ -26,6 +26,8 @@ SceneFormat detect_format(std::string_view text);
 // its JSON path's place (a member's key, an element's value); 0 for one about the scene as a
 // whole. Sorted by it, they are in the order of the file. load_scene leaves its own so.
 std::vector<size_t> places_in_text(std::string_view text, const std::vector<Diagnostic>& ds);
+// Sorts `ds` by places_in_text, ties as they were.
+void in_file_order(std::string_view text, std::vector<Diagnostic>& ds);
 
 // What a caller needs back: `full` keeps the parsed description (for converters and content
 // keys); `scene` lets a plainly valid model file skip it, which loads it several times faster.

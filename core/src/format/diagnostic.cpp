@@ -66,17 +66,19 @@ void Diagnostics::warning(std::string code, std::string message, Where where) {
       {Severity::warning, std::move(code), clean(std::move(message)), std::move(where)});
 }
 
-void Diagnostics::reorder(const std::vector<size_t>& place) {
-  std::vector<size_t> order(items_.size());
+void sort_by_place(std::vector<Diagnostic>& ds, const std::vector<size_t>& place) {
+  std::vector<size_t> order(ds.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
     return (a < place.size() ? place[a] : 0) < (b < place.size() ? place[b] : 0);
   });
   std::vector<Diagnostic> sorted;
-  sorted.reserve(items_.size());
-  for (size_t i : order) sorted.push_back(std::move(items_[i]));
-  items_ = std::move(sorted);
+  sorted.reserve(ds.size());
+  for (size_t i : order) sorted.push_back(std::move(ds[i]));
+  ds = std::move(sorted);
 }
+
+void Diagnostics::reorder(const std::vector<size_t>& place) { sort_by_place(items_, place); }
 
 std::string Diagnostics::error_count_text() const {
   return counted_all_ ? std::to_string(errors_) : "more than " + std::to_string(kMaxErrors);

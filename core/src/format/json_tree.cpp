@@ -1,6 +1,7 @@
 // The JSON reader shared by scenes and assignments (json_tree.h).
 #include "format/json_tree.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -169,75 +170,18 @@ class TreeBuilder {
   std::string deep_path_;
 };
 
-// A JSON string's value, from the '"' at `at`; `at` ends past the closing quote (or at the
-// end of the text). Escapes decoded, \u pairs to UTF-8, as the reader decodes keys.
-std::string read_string(std::string_view text, std::size_t& at) {
-  std::string out;
-  ++at;
-  auto hex4 = [&](std::size_t i) -> long {
-    if (i + 4 > text.size()) return -1;
-    long v = 0;
-    for (std::size_t k = i; k < i + 4; ++k) {
-      const char c = text[k];
-      const int d = c >= '0' && c <= '9'   ? c - '0'
-                    : c >= 'a' && c <= 'f' ? c - 'a' + 10
-                    : c >= 'A' && c <= 'F' ? c - 'A' + 10
-                                           : -1;
-      if (d < 0) return -1;
-      v = v * 16 + d;
-    }
-    return v;
-  };
-  auto put = [&](unsigned long cp) {
-    if (cp < 0x80) {
-      out += static_cast<char>(cp);
-    } else if (cp < 0x800) {
-      out += static_cast<char>(0xC0 | cp >> 6);
-      out += static_cast<char>(0x80 | (cp & 0x3F));
-    } else if (cp < 0x10000) {
-      out += static_cast<char>(0xE0 | cp >> 12);
-      out += static_cast<char>(0x80 | (cp >> 6 & 0x3F));
-      out += static_cast<char>(0x80 | (cp & 0x3F));
-    } else {
-      out += static_cast<char>(0xF0 | cp >> 18);
-      out += static_cast<char>(0x80 | (cp >> 12 & 0x3F));
-      out += static_cast<char>(0x80 | (cp >> 6 & 0x3F));
-      out += static_cast<char>(0x80 | (cp & 0x3F));
-    }
-  };
-  while (at < text.size() && text[at] != '"') {
-    if (text[at] != '\\') {
-      out += text[at++];
-      continue;
-    }
-    if (++at >= text.size()) break;
-    const char e = text[at++];
-    switch (e) {
-      case 'b': out += '\b'; break;
-      case 'f': out += '\f'; break;
-      case 'n': out += '\n'; break;
-      case 'r': out += '\r'; break;
-      case 't': out += '\t'; break;
-      case 'u': {
-        long cp = hex4(at);
-        if (cp < 0) break;
-        at += 4;
-        if (cp >= 0xD800 && cp < 0xDC00 && at + 1 < text.size() && text[at] == '\\' &&
-            text[at + 1] == 'u') {
-          const long low = hex4(at + 2);
-          if (low >= 0xDC00 && low < 0xE000) {
-            cp = 0x10000 + ((cp - 0xD800) << 10) + (low - 0xDC00);
-            at += 6;
-          }
-        }
-        put(static_cast<unsigned long>(cp));
-        break;
-      }
-      default: out += e;  // \" \\ \/
-    }
-  }
-  if (at < text.size()) ++at;
-  return out;
+// Moves `at` past the JSON string that starts there; returns it, quotes included.
+std::string_view string_token(std::string_view text, std::size_t& at) {
+  const std::size_t start = at++;
+  while (at < text.size() && text[at] != '"') at += text[at] == '\\' ? 2 : 1;
+  at = std::min(at + 1, text.size());
+  return text.substr(start, at - start);
+}
+
+// A member's key with its escapes decoded, as the parser decoded it.
+std::string key_text(std::string_view token) {
+  const Json j = Json::parse(token.begin(), token.end(), nullptr, false);
+  return j.is_string() ? j.get<std::string>() : std::string(token);
 }
 
 }  // namespace
@@ -276,7 +220,7 @@ std::vector<std::size_t> json_pointer_offsets(std::string_view text,
   auto member = [&] {
     if (at >= text.size() || text[at] != '"') return false;
     const std::size_t key_at = at;
-    path += "/" + json_pointer_token(read_string(text, at));
+    path += "/" + json_pointer_token(key_text(string_token(text, at)));
     note(path, key_at);
     skip_blank();
     if (at >= text.size() || text[at] != ':') return false;
@@ -312,7 +256,7 @@ std::vector<std::size_t> json_pointer_offsets(std::string_view text,
         continue;
       }
       if (c == '"') {
-        read_string(text, at);
+        string_token(text, at);
       } else {
         while (at < text.size() && text[at] != ',' && text[at] != '}' && text[at] != ']' &&
                text[at] != ' ' && text[at] != '\n' && text[at] != '\r' && text[at] != '\t')

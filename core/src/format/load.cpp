@@ -74,6 +74,10 @@ std::vector<size_t> places_in_text(std::string_view text, const std::vector<Diag
   return place;
 }
 
+void in_file_order(std::string_view text, std::vector<Diagnostic>& ds) {
+  sort_by_place(ds, places_in_text(text, ds));
+}
+
 LoadedScene load_scene(std::string_view text, LoadDetail detail,
                        const ResourceResolver* resolver) {
   LoadedScene out;
