@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cmath>
 #include <cstdlib>
+#include <optional>
 #include <thread>
 
 #include "farm_node.h"
@@ -185,7 +187,10 @@ FarmBackend::FarmBackend(const Settings& s, int workers,
   base.command_timeout = milliseconds(std::max(2000, 2 * s.lease_ms));
   m.config.prefix = s.redis_prefix;
   m.config.node = s.node_id.empty() ? default_node_id(s) : s.node_id;
-  m.config.build = "rayfarmd render " + std::to_string(kRenderVersion);
+  // The render version (the images) and the Function library (the farm's protocol): nodes
+  // that differ in either would disagree, so they refuse each other.
+  m.config.build = "rayfarmd render " + std::to_string(kRenderVersion) + ", farm library " +
+                   sha256_hex(farm::function_library()).substr(0, 12);
   m.config.feed_target = std::max(8, 2 * workers);
   m.config.block = milliseconds(std::clamp(s.heartbeat_ms, 50, 1000));
   m.setup = std::make_shared<farm::FarmSetup>(m.config);
@@ -198,7 +203,6 @@ FarmBackend::FarmBackend(const Settings& s, int workers,
   nc.lease = milliseconds(s.lease_ms);
   nc.cancel_poll = milliseconds(s.heartbeat_ms);  // a backstop: cancels come as messages
   nc.result_ttl = milliseconds(static_cast<long long>(s.result_ttl * 1000));
-  nc.job_timeout = milliseconds(static_cast<long long>(s.job_timeout * 1000));
   nc.on_cancel = std::move(on_cancel);
   m.node = std::make_unique<farm::FarmNode>(nc);
   m.node->start();
@@ -267,6 +271,9 @@ FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene
     s.max_active_per_client = max_jobs_of_client;
     s.max_jobs = m.settings.queue_capacity;
     s.ttl = ttl;
+    // A local job is timed by its node's scheduler, by its own render time; units spread over
+    // the farm by the clock from the job's start, with this node's limit.
+    if (!local) s.timeout = milliseconds(std::llround(m.settings.job_timeout * 1000));
     const farm::SubmitResult r =
         m.call([&](farm::FarmClient& fc) { return farm::submit_job(fc, s); });
     switch (r.status) {
@@ -409,6 +416,10 @@ bool FarmBackend::healthy(nlohmann::json& details) {
       return fc.connection().command({"SET", key, "1", "PX", "5000"});
     });
     details["status"] = "ok";
+    // The farm's own figures: its jobs are not in this node's queue.
+    const farm::FarmCounts n = m.call([&](farm::FarmClient& fc) { return fc.counts(); });
+    details["farm"] = {{"queued", n.queued}, {"running", n.running},
+                       {"assembling", n.assembling}, {"nodes", n.nodes}};
     return true;
   } catch (const Unavailable& e) {
     details["status"] = "unreachable";
@@ -418,12 +429,14 @@ bool FarmBackend::healthy(nlohmann::json& details) {
 }
 
 std::string FarmBackend::metrics_text() const {
-  const Impl& m = *impl_;
+  Impl& m = *impl_;
   const farm::NodeCounters& c = m.node->counters();
   std::string out;
   auto counter = [&](const char* name, const char* help, double v, const char* type = "counter") {
     out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " " + type + "\n" +
-           name + " " + std::to_string(v) + "\n";
+           name + " " + (v == std::floor(v) && std::fabs(v) < 1e15 ? std::to_string(std::llround(v))
+                                                                    : std::to_string(v)) +
+           "\n";
   };
   out += "# HELP rayfarm_node_info This farm node.\n# TYPE rayfarm_node_info gauge\n";
   out += "rayfarm_node_info{node=\"" + label_value(m.config.node) + "\"} 1\n";
@@ -439,6 +452,33 @@ std::string FarmBackend::metrics_text() const {
           static_cast<double>(c.jobs_assembled));
   counter("rayfarm_units_in_flight", "Units this node renders now.",
           static_cast<double>(m.node->in_flight()), "gauge");
+  counter("rayfarm_farm_jobs_timed_out_total",
+          "Farm jobs this node's janitor failed for running past their limit.",
+          static_cast<double>(c.jobs_timed_out));
+  counter("rayfarm_farm_jobs_orphaned_total",
+          "Farm jobs this node's janitor failed because their rendering node was gone.",
+          static_cast<double>(c.jobs_orphaned));
+  counter("rayfarm_farm_jobs_reassembled_total",
+          "Farm jobs this node's janitor put together for an assembler that was gone.",
+          static_cast<double>(c.jobs_reassembled));
+  // Farm-wide, from Redis: the jobs spread over the nodes are in no node's own queue. Left out
+  // (and rayfarm_farm_up 0) while Redis cannot be reached.
+  std::optional<farm::FarmCounts> n;
+  try {
+    n = m.call([&](farm::FarmClient& fc) { return fc.counts(); });
+  } catch (const Unavailable&) {
+  }
+  counter("rayfarm_farm_up", "1 when this node reached Redis for these figures.", n ? 1.0 : 0.0,
+          "gauge");
+  if (n) {
+    out += "# HELP rayfarm_farm_jobs Jobs of the whole farm by state.\n"
+           "# TYPE rayfarm_farm_jobs gauge\n";
+    out += "rayfarm_farm_jobs{state=\"queued\"} " + std::to_string(n->queued) + "\n";
+    out += "rayfarm_farm_jobs{state=\"running\"} " + std::to_string(n->running) + "\n";
+    out += "rayfarm_farm_jobs{state=\"assembling\"} " + std::to_string(n->assembling) + "\n";
+    counter("rayfarm_farm_nodes", "Farm nodes whose heartbeat is current.",
+            static_cast<double>(n->nodes), "gauge");
+  }
   const double calls = static_cast<double>(c.redis_calls + m.calls);
   const double secs = static_cast<double>(c.redis_micros + m.micros) / 1e6;
   out += "# HELP rayfarm_redis_round_trip_seconds Round trips to Redis (workers and requests).\n"

@@ -136,9 +136,10 @@ Result<SubmitResult> FarmClient::submit(const SubmitRequest& q) {
   const std::string max_active = std::to_string(q.max_active_per_client);
   const std::string max_jobs = std::to_string(q.max_jobs);
   const std::string target = std::to_string(config_.feed_target);
-  const std::string ttl = ms(q.ttl), idem_ttl = ms(q.idempotency_ttl);
-  std::vector<std::string_view> args{q.job, q.client, prio,   units, max_active, max_jobs,
-                                     target, ttl,     q.idempotency_key, idem_ttl, q.opts};
+  const std::string ttl = ms(q.ttl), idem_ttl = ms(q.idempotency_ttl), timeout = ms(q.timeout);
+  std::vector<std::string_view> args{q.job,  q.client, prio,   units,    max_active,
+                                     max_jobs, target, ttl,    q.idempotency_key,
+                                     idem_ttl, q.opts, timeout};
   for (const auto& [k, v] : q.fields) {
     args.push_back(k);
     args.push_back(v);
@@ -251,14 +252,21 @@ Result<ReclaimResult> FarmClient::reclaim(std::string_view janitor, std::chrono:
 }
 
 Result<SweepResult> FarmClient::sweep(std::string_view janitor, std::chrono::milliseconds lease,
-                                      std::chrono::milliseconds job_timeout, int count) {
-  const std::string l = ms(lease), t = ms(job_timeout), n = std::to_string(count);
-  auto r = fcall("rf1_sweep", {janitor, l, t, n});
+                                      int count) {
+  const std::string l = ms(lease), n = std::to_string(count);
+  auto r = fcall("rf1_sweep", {janitor, l, n});
   if (!r) return r.error();
   if (r->size() < 2) return unexpected("rf1_sweep", "shape");
   SweepResult out{static_cast<int>((*r)[0].integer()), static_cast<int>((*r)[1].integer()), {}};
   for (std::size_t i = 2; i < r->size(); ++i) out.assemble.emplace_back((*r)[i].str());
   return out;
+}
+
+Result<FarmCounts> FarmClient::counts() {
+  auto r = fcall("rf1_counts", {});
+  if (!r) return r.error();
+  if (r->size() != 4) return unexpected("rf1_counts", "shape");
+  return FarmCounts{(*r)[0].integer(), (*r)[1].integer(), (*r)[2].integer(), (*r)[3].integer()};
 }
 
 Result<CancelResult> FarmClient::cancel(std::string_view job, std::string_view client) {

@@ -72,6 +72,8 @@ struct SubmitRequest {
   int max_jobs = 0;  // queued + running jobs across the farm; 0: no limit
   std::chrono::milliseconds ttl{std::chrono::hours(1)};  // the record's life after it ends
   std::chrono::milliseconds idempotency_ttl{std::chrono::hours(24)};
+  // The job fails this long after it starts running (the sweep); 0: no limit.
+  std::chrono::milliseconds timeout{0};
   std::vector<std::pair<std::string, std::string>> fields;  // more fields for the job record
 };
 enum class SubmitStatus { Accepted, Exists, ClientLimit, Full };
@@ -98,9 +100,13 @@ struct ReclaimResult {
   int requeued = 0;
   int failed = 0;  // jobs failed because a unit reached max_tries
 };
+// The farm's jobs by state and its live nodes (rf1_counts).
+struct FarmCounts {
+  long long queued = 0, running = 0, assembling = 0, nodes = 0;
+};
 // What rf1_sweep did with the jobs no unit lease covers.
 struct SweepResult {
-  int timed_out = 0;  // failed: running past the farm's job limit
+  int timed_out = 0;  // failed: running past its own limit (SubmitRequest::timeout)
   int orphaned = 0;   // failed: a local job whose node is gone
   std::vector<std::string> assemble;  // their assembler is gone: this janitor assembles them
 };
@@ -161,10 +167,10 @@ class FarmClient {
   Result<std::vector<std::string>> held_entries(int count = 100);
   Result<ReclaimResult> reclaim(std::string_view janitor, std::chrono::milliseconds lease,
                                 std::string_view cursor = "0-0", int count = 64);
-  // `job_timeout` 0: no farm-wide limit.
   Result<SweepResult> sweep(std::string_view janitor, std::chrono::milliseconds lease,
-                            std::chrono::milliseconds job_timeout, int count = 100);
+                            int count = 100);
   Result<CancelResult> cancel(std::string_view job, std::string_view client);
+  Result<FarmCounts> counts();
   Result<FinishResult> finish(std::string_view job, std::string_view result_key,
                               const Fields& fields = {});
   Result<RecordStatus> record(const RecordRequest& request);

@@ -99,6 +99,7 @@ Result<SubmitResult> submit_job(FarmClient& client, const FarmSubmission& s) {
   r.max_active_per_client = s.max_active_per_client;
   r.max_jobs = s.max_jobs;
   r.ttl = s.ttl;
+  r.timeout = s.timeout;
   return client.submit(r);
 }
 
@@ -384,7 +385,7 @@ void FarmNode::keep_alive() {
           cursor = r->cursor;
           if (cursor == "0-0") break;
         }
-        if (auto swept = fc.sweep(config_.farm.node, config_.lease, config_.job_timeout)) {
+        if (auto swept = fc.sweep(config_.farm.node, config_.lease)) {
           counters_.jobs_timed_out += swept->timed_out;
           counters_.jobs_orphaned += swept->orphaned;
           for (const std::string& job : swept->assemble) {

@@ -54,6 +54,7 @@ struct FarmSubmission {
   int max_active_per_client = 8;
   int max_jobs = 0;
   std::chrono::milliseconds ttl{std::chrono::hours(1)};
+  std::chrono::milliseconds timeout{0};  // its render limit from its start; 0: none
   // Rendered by the submitting node alone (rf1_record ends it): no units, no scene stored.
   bool local = false;
   std::vector<std::pair<std::string, std::string>> fields;  // more fields for the job record
@@ -74,8 +75,6 @@ struct NodeConfig {
   // reconnected.
   std::chrono::milliseconds cancel_poll{200};
   std::chrono::milliseconds result_ttl{std::chrono::hours(1)};
-  // A job running longer than this fails, farm-wide (the janitor's sweep); 0: no limit.
-  std::chrono::milliseconds job_timeout{0};
   // Called with each job canceled anywhere, as the message arrives (a node's own renders of
   // local jobs stop there).
   std::function<void(const std::string&)> on_cancel;
@@ -88,7 +87,7 @@ struct NodeCounters {
   std::atomic<std::uint64_t> units_reclaimed{0};   // other nodes' units this node requeued
   std::atomic<std::uint64_t> jobs_assembled{0};
   std::atomic<std::uint64_t> jobs_reassembled{0};  // of an assembler that died (as janitor)
-  std::atomic<std::uint64_t> jobs_timed_out{0};    // failed by this janitor: the farm's limit
+  std::atomic<std::uint64_t> jobs_timed_out{0};    // failed by this janitor: past their own limit
   std::atomic<std::uint64_t> jobs_orphaned{0};     // failed by this janitor: local, node gone
   std::atomic<std::uint64_t> redis_calls{0};
   std::atomic<std::uint64_t> redis_micros{0};      // summed round trips

@@ -14,9 +14,10 @@
 --    XLEN - XPENDING = entries not yet delivered.
 --
 -- Keys under P: job:{id} (hash: state queued|running|assembling|done|failed|canceled, client,
--- prio, units, fed, done, created/started/finished_ms, ttl_ms, opts, result, error, assembler,
--- local), tiles:{id} (hash unit -> result), client:{c} (hash: active), cjobs:{c} (zset),
--- queued/running/assembling (zsets by ms), ring:{p} (list of clients with unfed units),
+-- prio, units, fed, done, created/started/finished_ms, ttl_ms, timeout_ms, opts, result, error,
+-- assembler, local), tiles:{id} (hash unit -> result), client:{c} (hash: active), cjobs:{c}
+-- (zset), queued/running/assembling (zsets by ms), deadlines (zset: running jobs with a limit,
+-- by the ms they fail at), ring:{p} (list of clients with unfed units),
 -- cj:{p}:{c} (list of that client's jobs with unfed units), work (stream, group 'render':
 -- {job, unit, try}), idem:{c}:{key} (string -> job id), node:{n} (string, PX), nodes (zset),
 -- lock:janitor; meta:build and meta:epoch are set by the client before the library loads.
@@ -45,7 +46,7 @@ end
 -- Fields a caller may not set through finish/record's extra pairs.
 local reserved = {state = true, client = true, prio = true, units = true, fed = true,
                   done = true, created_ms = true, started_ms = true, finished_ms = true,
-                  ttl_ms = true, ['local'] = true, assembler = true}
+                  ttl_ms = true, ['local'] = true, assembler = true, timeout_ms = true}
 
 local function check_extra(a, from)
   if (#a - from + 1) % 2 ~= 0 then return 'ERR odd number of extra field arguments' end
@@ -53,6 +54,16 @@ local function check_extra(a, from)
     if reserved[a[i]] then return 'ERR field ' .. a[i] .. ' is set by the farm itself' end
   end
   return nil
+end
+
+-- Marks a job running from t: in the running index and, when it has a limit of its own
+-- (its accepting node's --job-timeout), in the deadlines index the sweep reads.
+local function start_running(P, job, t)
+  local jk = P .. 'job:' .. job
+  redis.call('HSET', jk, 'state', 'running', 'started_ms', t)
+  redis.call('ZADD', P .. 'running', t, job)
+  local limit = tonumber(redis.call('HGET', jk, 'timeout_ms') or '0') or 0
+  if limit > 0 then redis.call('ZADD', P .. 'deadlines', t + limit, job) end
 end
 
 -- Moves an active job to a final state: out of the rings and indexes, tiles dropped, the
@@ -69,6 +80,7 @@ local function end_job(P, job, state, err, extra, from)
   unlink_job_from_ring(P, prio, client, job)
   redis.call('ZREM', P .. 'queued', job)
   redis.call('ZREM', P .. 'running', job)
+  redis.call('ZREM', P .. 'deadlines', job)
   redis.call('ZREM', P .. 'assembling', job)
   redis.call('HINCRBY', P .. 'client:' .. client, 'active', -1)
   redis.call('UNLINK', P .. 'tiles:' .. job)
@@ -104,9 +116,8 @@ local function feed(P, target)
           redis.call('HSET', jk, 'fed', nxt + 1)
           if st == 'queued' then
             local t = now_ms()
-            redis.call('HSET', jk, 'state', 'running', 'started_ms', t)
             redis.call('ZREM', P .. 'queued', job)
-            redis.call('ZADD', P .. 'running', t, job)
+            start_running(P, job, t)
             event(P, job, 'running', 0, total)
           end
           if nxt + 1 >= total then unlink_job_from_ring(P, prio, client, job) end
@@ -148,7 +159,8 @@ local function retry_or_fail(P, job, unit, try, max_tries, why)
 end
 
 -- ARGV: P, job, client, prio, units, max_active, max_jobs, target, ttl_ms, idem_key,
---       idem_ttl_ms, opts, field, value, ... -> {'accepted'|'exists'|'limit'|'full', job}
+--       idem_ttl_ms, opts, timeout_ms (0: none), field, value, ...
+--   -> {'accepted'|'exists'|'limit'|'full', job}
 -- units = 0: a local job, rendered by the accepting node (its field 'node') and ended with
 -- rf1_record; it counts against the limits and is visible to every node, but is never fed.
 local function submit(_, a)
@@ -158,7 +170,9 @@ local function submit(_, a)
   local ttl, idem, idem_ttl = tonumber(a[9]), a[10], tonumber(a[11])
   if prio ~= 0 and prio ~= 1 and prio ~= 2 then return redis.error_reply('ERR bad priority') end
   if not units or units < 0 then return redis.error_reply('ERR bad unit count') end
-  local bad = check_extra(a, 13)
+  local timeout = tonumber(a[13])
+  if not timeout or timeout < 0 then return redis.error_reply('ERR bad timeout') end
+  local bad = check_extra(a, 14)
   if bad then return redis.error_reply(bad) end
   local ik = nil
   if idem ~= '' then
@@ -179,13 +193,13 @@ local function submit(_, a)
   redis.call('HINCRBY', ck, 'active', 1)
   local t = now_ms()
   redis.call('HSET', jk, 'client', client, 'prio', prio, 'units', units, 'fed', 0,
-             'done', 0, 'created_ms', t, 'ttl_ms', ttl, 'opts', a[12])
-  for i = 13, #a, 2 do redis.call('HSET', jk, a[i], a[i + 1]) end
+             'done', 0, 'created_ms', t, 'ttl_ms', ttl, 'opts', a[12], 'timeout_ms', timeout)
+  for i = 14, #a, 2 do redis.call('HSET', jk, a[i], a[i + 1]) end
   redis.call('ZADD', P .. 'cjobs:' .. client, t, job)
   if ik then redis.call('SET', ik, job, 'PX', idem_ttl) end
   if units == 0 then
-    redis.call('HSET', jk, 'state', 'running', 'local', '1', 'started_ms', t)
-    redis.call('ZADD', P .. 'running', t, job)
+    redis.call('HSET', jk, 'local', '1')
+    start_running(P, job, t)
     event(P, job, 'running', 0, 0)
     return {'accepted', job}
   end
@@ -292,6 +306,7 @@ local function complete(_, a)
     local t = now_ms()
     redis.call('HSET', jk, 'state', 'assembling', 'assembler', node, 'assembling_ms', t)
     redis.call('ZREM', P .. 'running', job)
+    redis.call('ZREM', P .. 'deadlines', job)  -- rendered: no longer the limit's to end
     redis.call('ZADD', P .. 'assembling', t, job)
     event(P, job, 'assembling', done, total)
     return 'assemble'
@@ -345,6 +360,7 @@ local function reclaim(_, a)
       lease = math.max(lease, tonumber(renewal[i + 1]) or 0)
     else
       redis.call('HDEL', P .. 'renewal', renewal[i])
+      redis.call('ZREM', P .. 'nodes', renewal[i])  -- gone: no longer counted (rf1_counts)
     end
   end
   local r = redis.call('XAUTOCLAIM', P .. 'work', G, jan, lease, a[5], 'COUNT', a[6])
@@ -363,28 +379,26 @@ local function reclaim(_, a)
   return {r[1], requeued, failed}
 end
 
--- ARGV: P, janitor, lease_ms, job_timeout_ms (0: none), count
---   -> {timed_out, orphaned, job to assemble, ...}
--- Jobs no unit lease covers: a job running longer than the farm's limit fails (its units stop
--- on the cancel channel); a local job whose node is gone fails; a job whose assembler is gone
+-- ARGV: P, janitor, lease_ms, count -> {timed_out, orphaned, job to assemble, ...}
+-- Jobs no unit lease covers: a job running past its deadline (its accepting node's limit)
+-- fails (its units stop on the cancel channel); a local job whose node is gone fails; a job whose assembler is gone
 -- (or has not finished in four leases) goes to the janitor, which assembles it from the tiles
 -- (they are all in Redis).
 local function sweep(_, a)
-  local P, jan, lease, limit, count = a[1], a[2], tonumber(a[3]), tonumber(a[4]), a[5]
+  local P, jan, lease, count = a[1], a[2], tonumber(a[3]), a[4]
   local t = now_ms()
   local timed_out, orphaned, assemble = 0, 0, {}
   local function node_alive(node)
     return node and redis.call('EXISTS', P .. 'node:' .. node) == 1
   end
-  if limit > 0 then
-    local ids = redis.call('ZRANGEBYSCORE', P .. 'running', '-inf', t - limit, 'LIMIT', 0, count)
-    for _, job in ipairs(ids) do
-      end_job(P, job, 'failed', 'the job ran longer than the farm\'s limit of ' ..
-              math.floor(limit / 1000) .. ' s: lower spp, max_depth or the image size',
-              {'code', 'timeout'}, 1)
-      redis.call('PUBLISH', P .. 'cancel', job)
-      timed_out = timed_out + 1
-    end
+  for _, job in ipairs(redis.call('ZRANGEBYSCORE', P .. 'deadlines', '-inf', t,
+                                  'LIMIT', 0, count)) do
+    local limit = tonumber(redis.call('HGET', P .. 'job:' .. job, 'timeout_ms') or '0') or 0
+    end_job(P, job, 'failed', 'the job ran longer than its limit of ' ..
+            string.format('%g', limit / 1000) .. ' s: lower spp, max_depth or the image size',
+            {'code', 'timeout'}, 1)
+    redis.call('PUBLISH', P .. 'cancel', job)
+    timed_out = timed_out + 1
   end
   for _, job in ipairs(redis.call('ZRANGEBYSCORE', P .. 'running', '-inf', t - lease,
                                   'LIMIT', 0, count)) do
@@ -473,6 +487,18 @@ local function record(_, a)
   return {'recorded', state}
 end
 
+-- ARGV: P -> {queued, running, assembling, live nodes}: the farm's figures for /metrics and
+-- /healthz. A node is live while its heartbeat key lasts.
+local function counts(_, a)
+  local P = a[1]
+  local live = 0
+  for _, node in ipairs(redis.call('ZRANGE', P .. 'nodes', 0, -1)) do
+    live = live + redis.call('EXISTS', P .. 'node:' .. node)
+  end
+  return {redis.call('ZCARD', P .. 'queued'), redis.call('ZCARD', P .. 'running'),
+          redis.call('ZCARD', P .. 'assembling'), live}
+end
+
 -- ARGV: P, node, ms -> 1 when `node` holds the janitor lock for the next ms (taken or renewed)
 local function lock(_, a)
   local k = a[1] .. 'lock:janitor'
@@ -502,3 +528,4 @@ reg('rf1_sweep', sweep, {'allow-oom'})
 reg('rf1_finish', finish, {'allow-oom'})
 reg('rf1_record', record)
 reg('rf1_lock', lock, {'allow-oom'})
+reg('rf1_counts', counts, {'no-writes', 'allow-oom'})

@@ -67,7 +67,7 @@ void run_node(const RedisServer& server, FarmConfig cfg, milliseconds unit, mill
         cursor = r->cursor;
         if (cursor == "0-0") break;
       }
-      (void)farm.sweep(cfg.node, lease, milliseconds(0));
+      (void)farm.sweep(cfg.node, lease);
     }
   };
   while (!self.killed) {

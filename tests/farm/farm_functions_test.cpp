@@ -369,11 +369,11 @@ TEST_F(FarmFunctions, TheSweepFailsALocalJobWhoseNodeIsGone) {
   ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
   ASSERT_TRUE(n->heartbeat("{}", 10s, {}));  // n1 is alive; ghost never was
   // Not before a lease has passed since the job started.
-  auto early = n->sweep("n1", 10s, 0ms);
+  auto early = n->sweep("n1", 10s);
   ASSERT_TRUE(early) << early.error().message;
   EXPECT_EQ(early->orphaned, 0);
   std::this_thread::sleep_for(60ms);
-  auto r = n->sweep("n1", 50ms, 0ms);
+  auto r = n->sweep("n1", 50ms);
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_EQ(r->orphaned, 1);
   EXPECT_EQ(hget("job:lost", "state"), "failed");
@@ -383,27 +383,93 @@ TEST_F(FarmFunctions, TheSweepFailsALocalJobWhoseNodeIsGone) {
   EXPECT_EQ(hget("client:A", "active"), "1");
 }
 
-TEST_F(FarmFunctions, TheSweepFailsAJobPastTheFarmsLimitAndStopsItsUnits) {
-  TestNode n = node("n1");
-  submit(n, "j", "A", 3);
-  auto u = n->take();  // running from here
+// Each job carries the limit of the node that accepted it; the janitor ends it by that
+// limit, whatever its own, counted from when the job started running (not its wait in the
+// queue).
+TEST_F(FarmFunctions, TheSweepFailsAJobPastItsOwnLimitAndStopsItsUnits) {
+  TestNode n = node("n1", 8);  // all three jobs fed, so all running
+  auto submit_with = [&](const std::string& job, std::chrono::milliseconds limit) {
+    SubmitRequest q;
+    q.job = job;
+    q.client = job;
+    q.units = 3;
+    q.timeout = limit;
+    ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
+  };
+  submit_with("short", 50ms);
+  submit_with("long", 10s);
+  submit_with("none", 0ms);
+  EXPECT_EQ(hget("job:short", "timeout_ms"), "50");
+  auto u = n->take();  // the jobs run from their first fed unit on
   ASSERT_TRUE(u && *u);
+  ASSERT_EQ((*u)->job, "short");  // the first client's first unit
   Connection sub(server_->options());
   ASSERT_TRUE(sub.command({"SUBSCRIBE", prefix_ + "cancel"}));
-  auto none = n->sweep("n1", 10s, 10s);
+  auto none = n->sweep("n1", 10s);
   ASSERT_TRUE(none);
   EXPECT_EQ(none->timed_out, 0);
   std::this_thread::sleep_for(60ms);
-  auto r = n->sweep("n1", 10s, 50ms);
+  auto r = n->sweep("n1", 10s);
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_EQ(r->timed_out, 1);
-  EXPECT_EQ(hget("job:j", "state"), "failed");
-  EXPECT_EQ(hget("job:j", "code"), "timeout");
+  EXPECT_EQ(hget("job:short", "state"), "failed");
+  EXPECT_EQ(hget("job:short", "code"), "timeout");
+  EXPECT_NE(hget("job:short", "error").find("limit of 0.05 s"), std::string::npos)
+      << hget("job:short", "error");
+  EXPECT_EQ(hget("job:long", "state"), "running");
+  EXPECT_EQ(hget("job:none", "state"), "running");
   auto msg = sub.next_message(1s);
   ASSERT_TRUE(msg && *msg);
   ASSERT_EQ((*msg)->size(), 3u);
-  EXPECT_EQ((**msg)[2].str(), "j");
+  EXPECT_EQ((**msg)[2].str(), "short");
   EXPECT_EQ(*n->complete(**u, "px"), CompleteStatus::Dropped);
+}
+
+TEST_F(FarmFunctions, AJobsLimitCountsFromItsStartNotItsWaitInTheQueue) {
+  TestNode n = node("n1");  // feeds one unit ahead
+  submit(n, "first", "A", 1);
+  SubmitRequest q;
+  q.job = "waiting";
+  q.client = "B";
+  q.units = 1;
+  q.timeout = 80ms;
+  ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
+  std::this_thread::sleep_for(100ms);
+  ASSERT_EQ(n->sweep("n1", 10s)->timed_out, 0);
+  EXPECT_EQ(hget("job:waiting", "state"), "queued");
+  auto u = n->take();  // first's unit; "waiting" is fed behind it and starts now
+  ASSERT_TRUE(u && *u);
+  EXPECT_EQ((*u)->job, "first");
+  EXPECT_EQ(hget("job:waiting", "state"), "running");
+  ASSERT_EQ(n->sweep("n1", 10s)->timed_out, 0);
+  std::this_thread::sleep_for(100ms);
+  ASSERT_EQ(n->sweep("n1", 10s)->timed_out, 1);
+  EXPECT_EQ(hget("job:waiting", "code"), "timeout");
+  EXPECT_EQ(hget("job:first", "state"), "running");
+}
+
+// The figures /metrics and /healthz show for the whole farm: jobs by state and the nodes
+// whose heartbeat is current (a node whose key expired is not counted).
+TEST_F(FarmFunctions, CountsTheFarmsJobsByStateAndItsLiveNodes) {
+  TestNode n = node("n1");  // feeds one unit ahead
+  auto zero = n->counts();
+  ASSERT_TRUE(zero) << zero.error().message;
+  EXPECT_EQ(zero->queued + zero->running + zero->assembling + zero->nodes, 0);
+  submit(n, "a", "A", 1);
+  submit(n, "b", "B", 1);
+  ASSERT_TRUE(n->heartbeat("{}", 10s, {}));
+  TestNode gone = node("gone");
+  ASSERT_TRUE(gone->heartbeat("{}", 50ms, {}));
+  auto u = n->take();
+  ASSERT_TRUE(u && *u);
+  ASSERT_EQ(*n->complete(**u, "px"), CompleteStatus::Assemble);  // a: its only unit
+  std::this_thread::sleep_for(100ms);  // gone's heartbeat key expires
+  auto c = n->counts();
+  ASSERT_TRUE(c) << c.error().message;
+  EXPECT_EQ(c->queued, 0);      // b was fed behind a
+  EXPECT_EQ(c->running, 1);     // b
+  EXPECT_EQ(c->assembling, 1);  // a
+  EXPECT_EQ(c->nodes, 1);
 }
 
 TEST_F(FarmFunctions, TheSweepHandsAJobWhoseAssemblerIsGoneToTheJanitor) {
@@ -414,11 +480,11 @@ TEST_F(FarmFunctions, TheSweepHandsAJobWhoseAssemblerIsGoneToTheJanitor) {
   ASSERT_EQ(*n1->complete(**u, "px"), CompleteStatus::Assemble);  // n1 then dies
   ASSERT_TRUE(n2->heartbeat("{}", 10s, {}));
   std::this_thread::sleep_for(60ms);
-  auto r = n2->sweep("n2", 50ms, 0ms);
+  auto r = n2->sweep("n2", 50ms);
   ASSERT_TRUE(r) << r.error().message;
   EXPECT_EQ(r->assemble, std::vector<std::string>{"j"});
   EXPECT_EQ(hget("job:j", "assembler"), "n2");
-  EXPECT_EQ(n2->sweep("n2", 50ms, 0ms)->assemble.size(), 0u);  // a lease for n2 to do it
+  EXPECT_EQ(n2->sweep("n2", 50ms)->assemble.size(), 0u);  // a lease for n2 to do it
   ASSERT_TRUE(n2->finish("j", "png:j"));
   EXPECT_EQ(hget("job:j", "state"), "done");
   // A living assembler keeps the job for four leases.
@@ -428,9 +494,9 @@ TEST_F(FarmFunctions, TheSweepHandsAJobWhoseAssemblerIsGoneToTheJanitor) {
   ASSERT_EQ(*n1->complete(**v, "px"), CompleteStatus::Assemble);
   ASSERT_TRUE(n1->heartbeat("{}", 10s, {}));
   std::this_thread::sleep_for(150ms);
-  EXPECT_EQ(n2->sweep("n2", 100ms, 0ms)->assemble.size(), 0u);
+  EXPECT_EQ(n2->sweep("n2", 100ms)->assemble.size(), 0u);
   std::this_thread::sleep_for(300ms);
-  EXPECT_EQ(n2->sweep("n2", 100ms, 0ms)->assemble, std::vector<std::string>{"k"});
+  EXPECT_EQ(n2->sweep("n2", 100ms)->assemble, std::vector<std::string>{"k"});
 }
 
 TEST_F(FarmFunctions, BlockForWorkWakesOnASubmission) {

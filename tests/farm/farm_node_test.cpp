@@ -157,6 +157,29 @@ TEST_F(FarmNodes, ACancelFromAnyConnectionStopsEveryNodeAtOnce) {
   EXPECT_EQ(integer({"EXISTS", prefix_ + "tiles:j3"}), 0);
 }
 
+// A job's limit is the one its accepting node was given, whichever nodes render it and
+// whatever limit the janitor's own node has: a job of the short limit fails with `timeout`
+// (and its units stop on the cancel channel); one submitted without a limit goes on.
+TEST_F(FarmNodes, AJobPastItsOwnLimitFailsWhileOneWithoutALimitGoesOn) {
+  auto client = node("client");
+  FarmSubmission s = submission("j6", "scenes/lab.txt", 800, 600, 64, 1024 * 64 * 9.0 * 128);
+  s.timeout = 400ms;
+  ASSERT_TRUE(submit_job(*client.farm, s));
+  FarmSubmission slow = submission("j7", "scenes/lab.txt", 400, 300, 64, 1024 * 64 * 9.0 * 64);
+  slow.client = "bob";
+  ASSERT_TRUE(submit_job(*client.farm, slow));
+  auto a = start_node("a", 2), b = start_node("b", 2);
+  ASSERT_EQ(wait_final("j6", 30s), "failed");
+  EXPECT_EQ(hget("job:j6", "code"), "timeout");
+  EXPECT_NE(hget("job:j6", "error").find("limit of 0.4 s"), std::string::npos)
+      << hget("job:j6", "error");
+  EXPECT_EQ(a->counters().jobs_timed_out + b->counters().jobs_timed_out, 1u);
+  EXPECT_EQ(integer({"EXISTS", prefix_ + "tiles:j6"}), 0);
+  // Bob's job, submitted without a limit, goes on (then is canceled, to end the test).
+  EXPECT_EQ(hget("job:j7", "state"), "running");
+  ASSERT_TRUE(client->cancel("j7", "bob"));
+}
+
 TEST_F(FarmNodes, ACancelWhoseMessageWasMissedIsFoundByThePoll) {
   auto client = node("client");
   const FarmSubmission s = submission("j5", "scenes/lab.txt", 400, 300, 64, 1024 * 64 * 9.0 * 32);
