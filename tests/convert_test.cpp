@@ -525,6 +525,32 @@ TEST(Lint, ChecksTheChosenCamera) {
 }
 
 // The one lint that is an error: render would refuse the image, so check must not say "ok".
+// --precision float holds the lecture scene at 1e17 times its size and loses it past 1e18
+// (squares of lengths overflow), and at a window under 1e-18 (they underflow). The warning
+// names the entity with the largest length, whatever its kind.
+TEST(Lint, WarnsOfLengthsFloatPrecisionCannotSquare) {
+  RenderOptions f;
+  f.precision = Precision::f32;
+  EXPECT_TRUE(lint(lit("sphere s { material m center 1 2 -3 radius 1 }\n"), f).empty());
+  const std::string far = lit("sphere s { material m center 1 2 -3 radius 1 }\n"
+                              "triangle t { material m vertex1 0 0 -5e18 vertex2 1e18 0 -5e18 "
+                              "vertex3 0 1e18 -5e18 }\n");
+  const auto ds = lint(far, f);
+  ASSERT_EQ(codes(ds), std::vector<std::string>{"float-range"});
+  EXPECT_NE(ds[0].message.find("triangle 't' reaches 5e+18"), std::string::npos) << ds[0].message;
+  EXPECT_EQ(ds[0].where.line, 5);
+  EXPECT_TRUE(lint(far).empty()) << "double precision holds it";
+  const std::string light = lit("light far { location 0 0 3e18 }\n"
+                                "sphere s { material m center 1 2 -3 radius 1 }\n");
+  EXPECT_EQ(codes(lint(light, f)), std::vector<std::string>{"float-range"});
+  const auto tiny = lint("camera c { pixeldim 8 6 worlddim 8e-20 6e-20 viewpoint 4e-20 3e-20 "
+                         "5e-20 }\nmaterial m { diffuse 1 }\nlight l { location 0 1e-19 0 }\n"
+                         "sphere s { material m center 4e-20 3e-20 -5e-20 radius 1e-20 }\n",
+                         f);
+  ASSERT_EQ(codes(tiny), std::vector<std::string>{"float-range"});
+  EXPECT_NE(tiny[0].message.find("6e-20 wide"), std::string::npos) << tiny[0].message;
+}
+
 TEST(Lint, AnImageTooLargeToRenderIsAnErrorAtItsCamera) {
   auto errors_of = [](std::string_view text, const RenderOptions& options) {
     LoadedScene loaded = load_scene(text);

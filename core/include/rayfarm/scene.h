@@ -170,6 +170,12 @@ decltype(auto) visit_shape(F&& f, const Shape& shape) {
       shape);
 }
 
+// The largest magnitude among a shape's positions and sizes (directions, normalised before
+// use, are left out): what decides whether single precision can hold its arithmetic.
+double largest_magnitude(const Shape& shape);
+// The same for a light: its location, aim, and a projector's slide.
+double largest_magnitude(const Light& light);
+
 struct Object {
   std::string name;
   Where where;  // the entity in the source

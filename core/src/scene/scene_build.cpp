@@ -290,6 +290,42 @@ std::optional<int> EntityReader::texture(std::string_view key) {
   return builder_.texture(*a);
 }
 
+namespace {
+double max_abs(const glm::dvec3& v) {
+  return std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+}
+double max_size(const Window& w) { return std::max(std::abs(w.width), std::abs(w.height)); }
+}  // namespace
+
+double largest_magnitude(const Shape& shape) {
+  struct {
+    double operator()(const Sphere& s) const { return max_abs(s.center) + std::abs(s.radius); }
+    double operator()(const Plane& p) const { return max_abs(p.point); }
+    double operator()(const FinitePlane& f) const {
+      return max_abs(f.plane.point) + max_size(f.window);
+    }
+    double operator()(const TiledPlane& t) const {
+      return std::max(max_abs(t.plane.point), max_size(t.tile));
+    }
+    double operator()(const TexPlane& t) const {
+      return max_abs(t.plane.point) + max_size(t.window);
+    }
+    double operator()(const Triangle& t) const {
+      double m = t.plane ? max_abs(t.plane->point) : 0;
+      for (const glm::dvec3& v : t.vertex) m = std::max(m, max_abs(v));
+      return m;
+    }
+    double operator()(const Revsurf& r) const { return max_abs(r.base) + std::abs(r.height); }
+  } of;
+  return visit_shape(of, shape);
+}
+
+double largest_magnitude(const Light& l) {
+  double m = std::max(max_abs(l.location), max_abs(l.aim));
+  if (l.kind == LightKind::projector) m = std::max(m, max_abs(l.point) + max_size(l.window));
+  return m;
+}
+
 std::optional<int> Scene::find_camera(std::string_view name) const {
   if (cameras.empty()) return std::nullopt;
   if (name.empty()) return 0;
