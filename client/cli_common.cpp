@@ -122,7 +122,7 @@ ImageFormat output_format(const std::string& out, const std::string& format, Ima
   return ext == ".ppm" ? ImageFormat::ppm : ext == ".png" ? ImageFormat::png : otherwise;
 }
 
-std::string check_not_input(const std::string& out, std::initializer_list<std::string> inputs) {
+std::string check_not_input(const std::string& out, const std::vector<std::string>& inputs) {
   if (out == "-") return "";
   for (const std::string& in : inputs) {
     std::error_code ec;

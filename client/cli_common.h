@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -44,7 +45,11 @@ std::string usage_message(const CLI::App& app, const CLI::ParseError& e);
 std::string check_output(const std::string& out, const std::string& format);
 // Refuses an output that is one of the command's inputs (`render scene.png` named its image
 // after its scene; `compare a.png b.png --diff a.png`): the input would be lost. Empty when not.
-std::string check_not_input(const std::string& out, std::initializer_list<std::string> inputs);
+std::string check_not_input(const std::string& out, const std::vector<std::string>& inputs);
+inline std::string check_not_input(const std::string& out,
+                                   std::initializer_list<std::string> inputs) {
+  return check_not_input(out, std::vector<std::string>(inputs));
+}
 // The encoding of an image output: `format` ("png" or "ppm") when given, else the name's
 // extension in any case (".ppm", ".PPM"), else `otherwise` (render: the scene's own render
 // object's); the one rule of render, wait and compare.

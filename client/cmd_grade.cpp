@@ -465,9 +465,30 @@ Runner add_grade(CLI::App& app) {
     std::optional<Assignment> assignment = parse_assignment(*text, diags);
     if (!assignment) {
       std::cerr << format_diagnostics(diags, args->assignment, *text);
-      result.error = "the assignment has errors: " + diags.first_error()->message;
+      // The platform shows only the result file: the error's place goes in with it.
+      const Where& at = diags.first_error()->where;
+      const std::string place = at.line > 0 ? "line " + std::to_string(at.line) + ", column " +
+                                                  std::to_string(at.column) + ": "
+                                : !at.path.empty() ? "at " + at.path + ": "
+                                                   : "";
+      result.error = "the assignment has errors: " + place + diags.first_error()->message;
       if (args->out != "-") emit(*args, result, *format);
       return kBadInput;
+    }
+    {  // Neither the result nor a lock may be written over what the grade reads.
+      const fs::path dir = fs::path(args->assignment).parent_path();
+      std::vector<std::string> inputs{args->assignment};
+      for (const TestSpec& t : assignment->tests) {
+        inputs.push_back((dir / t.scene).string());
+        if (!args->images.empty()) inputs.push_back((fs::path(args->images) / t.image).string());
+      }
+      std::vector<std::pair<std::string, std::string>> outputs{{"-o", args->out}};
+      if (args->freeze) outputs.emplace_back("--lock", lock_path(*args).string());
+      for (const auto& [flag, out] : outputs)
+        if (std::string clash = check_not_input(out, inputs); !clash.empty()) {
+          std::cerr << "rayfarm: " << flag << " " << clash << "\n";
+          return kBadInput;
+        }
     }
     std::error_code dir_ec;
     if (!args->images.empty() && !fs::is_directory(args->images, dir_ec)) {
@@ -517,6 +538,9 @@ Runner add_grade(CLI::App& app) {
                                      problems.front() +
                                      (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : ""));
         for (const std::string& p : problems) std::cerr << "rayfarm: " << p << "\n";
+        // Graded against references that are not the frozen ones, the tests' feedback would
+        // mislead: the result says only why nothing was graded.
+        result.tests.clear();
         emit(*args, result, *format);
         return kBadInput;
       }

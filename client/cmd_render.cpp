@@ -163,7 +163,7 @@ Runner add_render(CLI::App& app) {
         if (args->quiet)
           lint_image_size(*loaded->scene, *options, lints);
         else
-          lint_scene(*loaded->scene, *options, lints);
+          lint_scene(*loaded->scene, *options, lints, /*every_camera=*/false);
       }
       for (const Diagnostic& d : lints.items())
         std::cerr << format_diagnostic(d, display_name(args->scene), *text);

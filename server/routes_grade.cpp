@@ -244,6 +244,14 @@ void post_grade(Service& svc, const Request& req, Response& res) {
   };
   if (uploaded != req.files.end() &&
       (!uploaded->second.filename.empty() || is_json(uploaded->second.content))) {
+    // An uploaded one and a stored one named in the query: which was meant?
+    if (req.has_param("assignment")) {
+      ApiError e = api_error(400, "invalid_option",
+                             "'assignment' is given twice: as an uploaded part and as "
+                             "assignment=NAME in the query; give one");
+      e.path = "assignment";
+      return send_error(res, e);
+    }
     text = uploaded->second.content;
     files = std::make_unique<PartFiles>(req);
   } else if (auto named = fields.find("assignment"); named != fields.end()) {

@@ -195,7 +195,7 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
   job.request_digest = digest;
   {
     Diagnostics lints;
-    lint_scene(*scene, options, lints);
+    lint_scene(*scene, options, lints, /*every_camera=*/false);
     for (const Diagnostic& d : loaded.diags.items())
       if (d.severity == Severity::warning) job.warnings.push_back(d);
     for (const Diagnostic& d : lints.items()) job.warnings.push_back(d);

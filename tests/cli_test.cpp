@@ -165,6 +165,44 @@ TEST_F(GradeCli, ALockFileRefusesChangedReferences) {
   Json refused = grade(assignment + " --images " + q(kLab + "/students/ada"), 2);
   EXPECT_EQ(refused["score"], 0);
   EXPECT_NE(refused["error"].get<std::string>().find("test 'A glint'"), std::string::npos);
+  // Nothing graded: no test shows feedback measured against the changed reference.
+  EXPECT_TRUE(refused["tests"].empty()) << refused.dump();
+}
+
+// The result and a frozen lock never go over what the grade reads: the assignment, a test's
+// scene, a student's image.
+TEST_F(GradeCli, OutputsNeverOverwriteTheGradesInputs) {
+  fs::copy(kLab + "/scenes", dir_ / "scenes");
+  fs::copy(kLab + "/lab1.json", dir_ / "lab1.json");
+  fs::copy(kLab + "/students/ada", dir_ / "ada");
+  const std::string assignment = q((dir_ / "lab1.json").string());
+  const std::string images = " --images " + q((dir_ / "ada").string());
+  auto bytes = [](const fs::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string before_json = bytes(dir_ / "lab1.json");
+  const std::string before_png = bytes(dir_ / "ada/glint.png");
+  const std::string before_scene = bytes(dir_ / "scenes/glint.txt");
+  for (const fs::path& target :
+       {dir_ / "lab1.json", dir_ / "ada/glint.png", dir_ / "scenes/glint.txt"}) {
+    Outcome r = run(kRayfarm + " grade " + assignment + images + " -o " + q(target.string()) +
+                    cache_ + " 2>&1");
+    EXPECT_EQ(r.code, 2) << target;
+    EXPECT_NE(r.out.find("itself: writing it would lose that file"), std::string::npos) << r.out;
+  }
+  Outcome lock = run(kRayfarm + " grade " + assignment + " --freeze --lock " + assignment +
+                     cache_ + " 2>&1");
+  EXPECT_EQ(lock.code, 2);
+  EXPECT_NE(lock.out.find("--lock"), std::string::npos) << lock.out;
+  EXPECT_EQ(bytes(dir_ / "lab1.json"), before_json);
+  EXPECT_EQ(bytes(dir_ / "ada/glint.png"), before_png);
+  EXPECT_EQ(bytes(dir_ / "scenes/glint.txt"), before_scene);
+  // Beside them is fine.
+  EXPECT_EQ(run(kRayfarm + " grade " + assignment + images + " -o " +
+                q((dir_ / "ada/result.json").string()) + cache_)
+                .code,
+            0);
 }
 
 // A test whose scene has errors is the instructor's to fix: nothing is graded (exit 2, a
@@ -330,6 +368,16 @@ TEST_F(GradeCli, AssignmentErrorsArePlaced) {
   EXPECT_NE(r.out.find("at /tests/0/pionts: unknown key 'pionts'; did you mean 'points'?"),
             std::string::npos)
       << r.out;
+  // The result file, all a platform shows, holds the place too.
+  const fs::path out = dir_ / "result.json";
+  run(kRayfarm + " grade " + q((dir_ / "bad.json").string()) + " --images . --format json -o " +
+      q(out.string()) + " 2>&1");
+  std::ifstream in(out);
+  const Json result = Json::parse(in, nullptr, false);
+  ASSERT_FALSE(result.is_discarded());
+  EXPECT_NE(result["error"].get<std::string>().find("at /tests/0/pionts: unknown key"),
+            std::string::npos)
+      << result.dump();
 }
 
 TEST(CompareCli, ExitsAsDiffDoes) {
@@ -709,6 +757,29 @@ TEST(CheckCli, StandardOutputThatCannotBeWrittenIsAnError) {
     Outcome r = run(kRayfarm + args + " 2>&1 >/dev/full");
     EXPECT_EQ(r.code, 2) << r.out;
     EXPECT_EQ(r.out, "rayfarm: cannot write to standard output: No space left on device\n");
+  }
+}
+
+// A camera too large to render is an error of the file for check, which looks at every
+// camera; a render looks at the camera it renders, with or without --quiet.
+TEST(CheckCli, ARenderIsRefusedOnlyForItsOwnCamerasSize) {
+  REQUIRE_CLIENT();
+  const TempDir dir("cli-cams");
+  const fs::path scene = dir.path / "two.txt";
+  std::ofstream(scene) << "camera a { pixeldim 10 10 worlddim 8 6 viewpoint 4 3 5 }\n"
+                          "camera b { pixeldim 65535 65535 worlddim 8 6 viewpoint 4 3 5 }\n"
+                          "material m { diffuse 1 }\nlight l { location 4 10 0 }\n"
+                          "sphere s { material m center 4 3 -3 radius 1 }\n";
+  const std::string out = " -o " + q((dir.path / "a.png").string());
+  EXPECT_EQ(run(kRayfarm + " check " + q(scene.string()) + " >/dev/null 2>&1").code, 1);
+  for (const std::string quiet : {"", " -q"}) {
+    Outcome r = run(kRayfarm + " render" + quiet + " " + q(scene.string()) + out + " 2>&1");
+    EXPECT_EQ(r.code, 0) << quiet << r.out;
+    EXPECT_EQ(r.out.find("image-too-large"), std::string::npos) << r.out;
+    Outcome b = run(kRayfarm + " render" + quiet + " " + q(scene.string()) + out +
+                    " --camera b 2>&1");
+    EXPECT_EQ(b.code, 2) << quiet << b.out;
+    EXPECT_NE(b.out.find("two.txt:2:1: error: camera 'b'"), std::string::npos) << b.out;
   }
 }
 

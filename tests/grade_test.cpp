@@ -323,6 +323,11 @@ TEST(Grade, FullPointsOnAScaleAreAPass) {
   TestResult steps = grade_one(off, R"(, "points": 3, "credit": {"metric": "bad_fraction", "steps": [[0.001, 1], [0.02, 0.5]]})");
   EXPECT_EQ(steps.score, 3);
   EXPECT_EQ(steps.status, "passed");
+  // A credit a hair under full (8.00004 against full at 8) rounds to the full points: those
+  // are what the platform shows, so the test passed.
+  TestResult near = grade_one(off, R"(, "points": 2, "credit": {"linear": {"metric": "max_abs", "full": 7.99996, "zero": 10}})");
+  EXPECT_EQ(near.score, 2);
+  EXPECT_EQ(near.status, "passed");
   TestResult all = grade_one(off, R"(, "points": 3)");
   EXPECT_EQ(all.score, 0);
   EXPECT_EQ(all.status, "failed");

@@ -88,6 +88,22 @@ TEST(ImageIo, PngRoundTripKeepsEveryPixel) {
   }
 }
 
+// A PNG of a few KB can decode to tens of MB: the bound a server admits decodes by is read
+// from its header, and covers what the decode really holds. A PPM holds its pixels.
+TEST(ImageIo, DecodeMemoryBoundIsReadFromTheHeader) {
+  Image big;
+  big.width = 2048;
+  big.height = 2048;
+  big.rgb.assign(static_cast<std::size_t>(big.width) * big.height * 3, 0);
+  const std::vector<unsigned char> png = encode_png(big);
+  ASSERT_LT(png.size(), 100000u);
+  EXPECT_GE(decode_memory_bound(view(png)), big.rgb.size() * 2);
+  const std::vector<unsigned char> ppm = encode_ppm(big);
+  EXPECT_GE(decode_memory_bound(view(ppm)), ppm.size());
+  EXPECT_LT(decode_memory_bound(view(ppm)), 3 * ppm.size());
+  EXPECT_EQ(decode_memory_bound("not an image"), 24u);
+}
+
 TEST(ImageIo, PpmRoundTripKeepsEveryPixel) {
   unsigned seed = 100;
   for (auto [w, h] : kSizes) {

@@ -1457,6 +1457,13 @@ TEST(ServerCompare, OptionsComeFromFormFieldsAndUnknownOnesAreRefused) {
   ASSERT_TRUE(typo);
   EXPECT_EQ(typo->status, 400);
   EXPECT_EQ(error_of(typo)["code"], "invalid_option");
+  // So is a misspelt form field (it was a 400 of another code).
+  httplib::MultipartFormDataItems typo_field = items;
+  typo_field.push_back({"treshold", "3", "", ""});
+  auto typo_part = c->Post("/compare", typo_field);
+  ASSERT_TRUE(typo_part);
+  EXPECT_EQ(typo_part->status, 400);
+  EXPECT_EQ(error_of(typo_part)["code"], "invalid_option") << typo_part->body;
   // Render options need a scene.
   auto render_option = c->Post("/compare?spp=4", items);
   ASSERT_TRUE(render_option);
@@ -1784,6 +1791,13 @@ TEST(ServerGrade, AStoredAssignmentIsNamedAndItsFolderIsAFence) {
     ASSERT_TRUE(bad);
     EXPECT_EQ(bad->status, 404) << name;
   }
+  // An uploaded assignment beside a stored one's name: neither is taken silently.
+  httplib::MultipartFormDataItems both = images;
+  both.push_back({"assignment", lab_file("lab1.json"), "lab1.json", "application/json"});
+  auto two = c->Post("/grade?assignment=lab1", both);
+  ASSERT_TRUE(two);
+  EXPECT_EQ(two->status, 400) << two->body;
+  EXPECT_EQ(error_of(two)["code"], "invalid_option");
 }
 
 TEST(ServerGrade, AssignmentErrorsAre400WithTheirPath) {

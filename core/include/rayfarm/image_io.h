@@ -2,6 +2,7 @@
 // stb_image) and binary PPM (P6; P3 is read too).
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -28,5 +29,10 @@ constexpr long long kMaxDecodePixels = 64LL * 1024 * 1024;
 // more than it would render.
 std::optional<Image> decode_image(std::string_view bytes, std::string* error,
                                   long long max_pixels = kMaxDecodePixels);
+
+// About the most memory decode_image takes for these bytes, read from the header: a PNG of a
+// few KB can decode to hundreds of MB, so a server admits decodes by this, not their size.
+// (Over kMaxDecodePixels the decode is refused at its header: the bytes' size then.)
+std::uint64_t decode_memory_bound(std::string_view bytes);
 
 }  // namespace rayfarm

@@ -11,8 +11,11 @@ namespace rayfarm {
 
 // Adds warnings: a light inside a sphere, the eye inside a sphere, an object behind the eye,
 // a material never used, a scene that renders entirely black, a camera option naming no camera;
-// and one error, "image-too-large": an image that render_image would refuse for its size.
-void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags);
+// and one error, "image-too-large": an image that render_image would refuse for its size, for
+// the camera the options choose and, with `every_camera` (check), for each other camera at
+// its own size. A render looks only at its own camera.
+void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags,
+                bool every_camera = true);
 
 // Its one error alone, where warnings would not be shown (render --quiet): a scene's objects
 // are not walked.

@@ -125,7 +125,8 @@ void lint_float_range(const Scene& scene, const Camera& cam, const RenderOptions
                   cam.where);
 }
 
-void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags) {
+void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags,
+                bool every_camera) {
   auto cam_index = scene.find_camera(options.camera);
   if (!cam_index) {
     diags.warning("unknown-camera", "no camera named '" + options.camera + "'", {});
@@ -133,7 +134,7 @@ void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& d
   }
   const Camera& cam = scene.cameras[*cam_index];
   lint_size(scene, cam, options, diags);
-  lint_other_cameras(scene, options, diags);
+  if (every_camera) lint_other_cameras(scene, options, diags);
   lint_float_range(scene, cam, options, diags);
   glm::dvec3 eye = cam.viewpoint;
   glm::dvec3 centre{cam.world_width / 2, cam.world_height / 2, 0};

@@ -187,7 +187,8 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
     // Scores to 1/10000 of a point, as the points are (0.1 + 0.2 must sum as a platform shows
     // it). With a scale of credit the test passes when it earns its full points.
     r.score = std::round(t.points * credit * 10000) / 10000;
-    r.status = (all_or_nothing ? passed : credit >= 1) ? "passed" : "failed";
+    // Full points as shown: a credit a hair under 1 that rounds to them is a pass.
+    r.status = (all_or_nothing ? passed : r.score >= t.points) ? "passed" : "failed";
     if (m->max_abs == 0) {
       r.message = "identical to the reference";
     } else {

@@ -75,6 +75,11 @@ std::optional<std::string> without_empty_idats(std::string_view png) {
   return out;
 }
 
+std::size_t png_alloc_limit(std::size_t file_bytes, std::uint64_t width, std::uint64_t height) {
+  const std::size_t raw = width * height * 8 + height;
+  return std::max(2 * file_bytes, 2 * raw) + 65536;
+}
+
 std::optional<Image> decode_png(std::string_view bytes, std::string* error, long long max_pixels) {
   // IHDR is read here so that a hostile size is refused before stb allocates anything.
   if (bytes.size() < 8 + 8 + 13 || read_be32(bytes, 8) != 13 || bytes.substr(12, 4) != "IHDR") {
@@ -88,8 +93,7 @@ std::optional<Image> decode_png(std::string_view bytes, std::string* error, long
   if (cleaned) bytes = *cleaned;
   // No legitimate stb allocation exceeds twice the input (the IDAT buffer doubles) or twice
   // the raw image at its widest (16-bit RGBA plus a filter byte per row; inflate doubles).
-  std::size_t raw = width * height * 8 + height;
-  std::size_t alloc_limit = std::max(2 * bytes.size(), 2 * raw) + 65536;
+  std::size_t alloc_limit = png_alloc_limit(bytes.size(), width, height);
   auto png = stb::decode_png_rgb(reinterpret_cast<const unsigned char*>(bytes.data()),
                                  static_cast<int>(bytes.size()), alloc_limit);
   if (png.rgb.empty()) {
@@ -318,6 +322,15 @@ std::vector<unsigned char> encode_ppm(const Image& image) {
 
 std::vector<unsigned char> encode_image(const Image& image, ImageFormat format) {
   return format == ImageFormat::ppm ? encode_ppm(image) : encode_png(image);
+}
+
+std::uint64_t decode_memory_bound(std::string_view bytes) {
+  if (bytes.starts_with(kPngSignature) && bytes.size() >= 24) {
+    const std::uint64_t width = read_be32(bytes, 16), height = read_be32(bytes, 20);
+    if (width * height > static_cast<std::uint64_t>(kMaxDecodePixels)) return bytes.size();
+    return png_alloc_limit(bytes.size(), width, height) + width * height * 3;
+  }
+  return 2 * bytes.size();  // a PPM holds every pixel it decodes to
 }
 
 std::optional<Image> decode_image(std::string_view bytes, std::string* error,
