@@ -381,9 +381,9 @@ end
 
 -- ARGV: P, janitor, lease_ms, count -> {timed_out, orphaned, job to assemble, ...}
 -- Jobs no unit lease covers: a job running past its deadline (its accepting node's limit)
--- fails (its units stop on the cancel channel); a local job whose node is gone fails; a job whose assembler is gone
--- (or has not finished in four leases) goes to the janitor, which assembles it from the tiles
--- (they are all in Redis).
+-- fails (its units stop on the cancel channel); a local job whose node is gone fails; a job
+-- whose assembler is gone (or has not finished in four leases) goes to the janitor, which
+-- assembles it from the tiles (they are all in Redis).
 local function sweep(_, a)
   local P, jan, lease, count = a[1], a[2], tonumber(a[3]), a[4]
   local t = now_ms()
@@ -393,12 +393,17 @@ local function sweep(_, a)
   end
   for _, job in ipairs(redis.call('ZRANGEBYSCORE', P .. 'deadlines', '-inf', t,
                                   'LIMIT', 0, count)) do
-    local limit = tonumber(redis.call('HGET', P .. 'job:' .. job, 'timeout_ms') or '0') or 0
-    end_job(P, job, 'failed', 'the job ran longer than its limit of ' ..
-            string.format('%g', limit / 1000) .. ' s: lower spp, max_depth or the image size',
-            {'code', 'timeout'}, 1)
-    redis.call('PUBLISH', P .. 'cancel', job)
-    timed_out = timed_out + 1
+    local f = redis.call('HMGET', P .. 'job:' .. job, 'state', 'timeout_ms')
+    local limit = tonumber(f[2] or '0') or 0
+    redis.call('ZREM', P .. 'deadlines', job)
+    -- (a job no longer running, or whose record expired, has nothing left to end)
+    if f[1] == 'running' then
+      end_job(P, job, 'failed', 'the job ran longer than its limit of ' ..
+              string.format('%g', limit / 1000) .. ' s: lower spp, max_depth or the image size',
+              {'code', 'timeout'}, 1)
+      redis.call('PUBLISH', P .. 'cancel', job)
+      timed_out = timed_out + 1
+    end
   end
   for _, job in ipairs(redis.call('ZRANGEBYSCORE', P .. 'running', '-inf', t - lease,
                                   'LIMIT', 0, count)) do
