@@ -447,6 +447,24 @@ Runner add_grade(CLI::App& app) {
       return kBadInput;
     }
     GradeResult result;
+    // Neither the result nor a lock may be written over what the grade reads: the assignment
+    // and the lock it is checked against first (even a result saying "grader error" is written),
+    // then its scenes and the student's images once it is read.
+    const std::string lock_file = lock_path(*args).string();
+    auto refused_output = [&](const std::vector<std::string>& inputs) {
+      std::vector<std::pair<std::string, std::string>> outputs{{"-o", args->out}};
+      if (args->freeze) outputs.emplace_back("--lock", lock_file);
+      for (const auto& [flag, out] : outputs) {
+        std::vector<std::string> read = inputs;
+        if (!args->freeze || flag == "-o") read.push_back(args->freeze ? "-" : lock_file);
+        if (std::string clash = check_not_input(out, read); !clash.empty()) {
+          std::cerr << "rayfarm: " << flag << " " << clash << "\n";
+          return true;
+        }
+      }
+      return false;
+    };
+    if (refused_output({args->assignment})) return kBadInput;
     if (!args->freeze && args->images.empty() && args->run.empty()) {
       std::cerr << "rayfarm: give the student's images (--images DIR) or program (--run CMD)\n";
       set_grader_error(result, "the grader's command line is wrong: it names neither the "
@@ -475,20 +493,14 @@ Runner add_grade(CLI::App& app) {
       if (args->out != "-") emit(*args, result, *format);
       return kBadInput;
     }
-    {  // Neither the result nor a lock may be written over what the grade reads.
+    {
       const fs::path dir = fs::path(args->assignment).parent_path();
       std::vector<std::string> inputs{args->assignment};
       for (const TestSpec& t : assignment->tests) {
         inputs.push_back((dir / t.scene).string());
         if (!args->images.empty()) inputs.push_back((fs::path(args->images) / t.image).string());
       }
-      std::vector<std::pair<std::string, std::string>> outputs{{"-o", args->out}};
-      if (args->freeze) outputs.emplace_back("--lock", lock_path(*args).string());
-      for (const auto& [flag, out] : outputs)
-        if (std::string clash = check_not_input(out, inputs); !clash.empty()) {
-          std::cerr << "rayfarm: " << flag << " " << clash << "\n";
-          return kBadInput;
-        }
+      if (refused_output(inputs)) return kBadInput;
     }
     std::error_code dir_ec;
     if (!args->images.empty() && !fs::is_directory(args->images, dir_ec)) {

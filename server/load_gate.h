@@ -25,7 +25,14 @@ class LoadGate {
    public:
     Pass() = default;
     Pass(Pass&& o) noexcept : gate_(o.gate_) { o.gate_ = nullptr; }
-    Pass& operator=(Pass&&) = delete;
+    Pass& operator=(Pass&& o) noexcept {  // gives back the pass held, takes o's
+      if (this != &o) {
+        if (gate_) gate_->leave();
+        gate_ = o.gate_;
+        o.gate_ = nullptr;
+      }
+      return *this;
+    }
     Pass(const Pass&) = delete;
     ~Pass() {
       if (gate_) gate_->leave();

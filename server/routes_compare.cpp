@@ -137,23 +137,30 @@ void post_compare(Service& svc, const Request& req, Response& res) {
   // A small PNG can decode to hundreds of MB: decodes are admitted by what they will take (held
   // through the comparison), as large scenes are, or 64 threads at once would exhaust the
   // machine.
-  std::optional<LoadGate::Pass> pass;
+  LoadGate::Pass pass;
   if (req.has_file("a") && req.has_file("b")) {
     for (const auto& [name, part] : req.files)
       if (name != "a" && name != "b" && !(part.filename.empty() && known.count(name)))
-        return send_error(res, 400, "invalid_option",
-                          "unexpected part '" + name.substr(0, 64) + "' beside 'a' and 'b'");
+      {
+        ApiError e = api_error(400, "invalid_option",
+                               "unexpected part '" + name.substr(0, 64) + "' beside 'a' and 'b'");
+        e.path = name.substr(0, 64);
+        return send_error(res, e);
+      }
     const std::string& a_bytes = req.get_file_value("a").content;
     const std::string& b_bytes = req.get_file_value("b").content;
-    pass.emplace(svc.enter_load(decode_memory_bound(a_bytes) + decode_memory_bound(b_bytes)));
+    pass = svc.enter_load(decode_memory_bound(a_bytes) + decode_memory_bound(b_bytes));
     a = decode_image(a_bytes, &error, max_pixels);
     if (!a) return send_error(res, 400, "invalid_image", "part 'a': " + error);
     b = decode_image(b_bytes, &error, max_pixels);
     if (!b) return send_error(res, 400, "invalid_image", "part 'b': " + error);
   } else if (with_scene) {
     const std::string& image_bytes = req.get_file_value("image").content;
-    pass.emplace(svc.enter_load(decode_memory_bound(image_bytes)));
+    pass = svc.enter_load(decode_memory_bound(image_bytes));
     b = decode_image(image_bytes, &error, max_pixels);
+    // Not held through the render: the scene's own load may need a pass, and the render takes
+    // long (the decoded image waits in one of the few waiting slots meanwhile).
+    pass = LoadGate::Pass();
     if (!b) return send_error(res, 400, "invalid_image", "part 'image': " + error);
     TextureFiles textures;
     if (ApiError e = texture_parts(req, {"scene", "image"}, textures)) return send_error(res, e);

@@ -191,6 +191,14 @@ TEST_F(GradeCli, OutputsNeverOverwriteTheGradesInputs) {
     EXPECT_EQ(r.code, 2) << target;
     EXPECT_NE(r.out.find("itself: writing it would lose that file"), std::string::npos) << r.out;
   }
+  // Also when the assignment does not parse: the "grader error" result is not written over it.
+  {
+    std::ofstream(dir_ / "broken.json") << "{ not json";
+    const std::string broken = q((dir_ / "broken.json").string());
+    Outcome r = run(kRayfarm + " grade " + broken + images + " -o " + broken + cache_ + " 2>&1");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_EQ(bytes(dir_ / "broken.json"), "{ not json");
+  }
   Outcome lock = run(kRayfarm + " grade " + assignment + " --freeze --lock " + assignment +
                      cache_ + " 2>&1");
   EXPECT_EQ(lock.code, 2);
@@ -198,6 +206,14 @@ TEST_F(GradeCli, OutputsNeverOverwriteTheGradesInputs) {
   EXPECT_EQ(bytes(dir_ / "lab1.json"), before_json);
   EXPECT_EQ(bytes(dir_ / "ada/glint.png"), before_png);
   EXPECT_EQ(bytes(dir_ / "scenes/glint.txt"), before_scene);
+  // The lock a grade checks against is an input too.
+  ASSERT_EQ(run(kRayfarm + " grade " + assignment + " --freeze" + cache_).code, 0);
+  const std::string before_lock = bytes(dir_ / "lab1.lock.json");
+  EXPECT_EQ(run(kRayfarm + " grade " + assignment + images + " -o " +
+                q((dir_ / "lab1.lock.json").string()) + cache_ + " 2>&1")
+                .code,
+            2);
+  EXPECT_EQ(bytes(dir_ / "lab1.lock.json"), before_lock);
   // Beside them is fine.
   EXPECT_EQ(run(kRayfarm + " grade " + assignment + images + " -o " +
                 q((dir_ / "ada/result.json").string()) + cache_)

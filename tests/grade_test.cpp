@@ -328,6 +328,9 @@ TEST(Grade, FullPointsOnAScaleAreAPass) {
   TestResult near = grade_one(off, R"(, "points": 2, "credit": {"linear": {"metric": "max_abs", "full": 7.99996, "zero": 10}})");
   EXPECT_EQ(near.score, 2);
   EXPECT_EQ(near.status, "passed");
+  // A test of no points on a scale passes on its full credit only (its score is 0 either way).
+  TestResult none = grade_one(off, R"(, "points": 0, "credit": {"linear": {"metric": "max_abs", "full": 2, "zero": 10}})");
+  EXPECT_EQ(none.status, "failed");
   TestResult all = grade_one(off, R"(, "points": 3)");
   EXPECT_EQ(all.score, 0);
   EXPECT_EQ(all.status, "failed");

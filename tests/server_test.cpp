@@ -1696,6 +1696,37 @@ std::string lab_file(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// An image large enough to take a turn at decoding (load_gate.h) beside a scene whose own load
+// takes one too (it has textures): the image's turn is given back before the render, or a
+// few such requests at once would each hold one turn and wait for another forever.
+TEST(ServerCompare, ImagesAndTexturedScenesAtOnceDoNotWaitOnEachOther) {
+  Settings s = test_settings();
+  s.max_waiting_requests = 16;
+  TestServer server(s);
+  const std::string scene = read_source("scenes/textures.txt");
+  const Image big = gradient(800, 600);  // its decode bound is several MB, past LoadGate::kSmall
+  const std::string image = png_bytes(big);
+  const int kClients = 2 * static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) + 1;
+  std::vector<std::thread> clients;
+  std::atomic<int> answered{0};
+  for (int i = 0; i < kClients; ++i)
+    clients.emplace_back([&] {
+      auto c = server.client();
+      c->set_read_timeout(60, 0);
+      httplib::MultipartFormDataItems items = {{"scene", scene, "scene.txt", "text/plain"},
+                                               {"image", image, "mine.png", "image/png"}};
+      for (const char* name : {"bricks", "checker", "slide"})
+        items.push_back({std::string("textures/") + name + ".ppm",
+                         read_source(std::string("scenes/textures/") + name + ".ppm"), "x.ppm",
+                         ""});
+      auto r = c->Post("/compare?spp=1&width=80&height=60", items);
+      if (r && (r->status == 200 || r->status == 422)) ++answered;
+    });
+  for (std::thread& t : clients) t.join();
+  EXPECT_EQ(answered.load(), kClients);
+}
+
+
 TEST(ServerGrade, AnUploadedAssignmentIsGradedInThePlatformsFormat) {
   TestServer server;
   auto c = server.client();

@@ -120,10 +120,24 @@ Result<JoinResult> FarmClient::join(std::string_view fresh_epoch) {
   const std::string build_key = key("meta:build"), epoch_key = key("meta:epoch");
   auto build = c_.command({"SET", build_key, config_.build, "NX", "GET"});
   if (!build) return build.error();
-  if (auto have = build->string(); have && *have != config_.build)
-    return Error{ErrorKind::Build, "this farm runs build " + std::string(*have) +
-                                       ", this node is " + config_.build +
-                                       ": images would not be byte-identical"};
+  if (auto have = build->string(); have && *have != config_.build) {
+    // An upgrade: once no node of the old build is alive, the farm takes the new one.
+    auto nodes = c_.command({"ZRANGE", key("nodes"), "0", "-1"});
+    if (!nodes) return nodes.error();
+    for (std::size_t i = 0; i < nodes->size(); ++i) {
+      auto alive = c_.command({"EXISTS", key("node:" + std::string((*nodes)[i].str()))});
+      if (!alive) return alive.error();
+      if (alive->integer() == 1)
+        return Error{ErrorKind::Build,
+                     "this farm runs build " + std::string(*have) + ", this node is " +
+                         config_.build +
+                         ": the nodes would render different images or disagree on the farm's "
+                         "functions; the farm takes this build once no node of the other is "
+                         "alive"};
+    }
+    auto set = c_.command({"SET", build_key, config_.build});
+    if (!set) return set.error();
+  }
   auto epoch = c_.command({"SET", epoch_key, fresh_epoch, "NX", "GET"});
   if (!epoch) return epoch.error();
   if (auto have = epoch->string()) return JoinResult{std::string(*have), false};

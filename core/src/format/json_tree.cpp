@@ -180,6 +180,8 @@ std::string_view string_token(std::string_view text, std::size_t& at) {
 
 // A member's key with its escapes decoded, as the parser decoded it.
 std::string key_text(std::string_view token) {
+  if (token.size() >= 2 && token.back() == '"' && token.find('\\') == std::string_view::npos)
+    return std::string(token.substr(1, token.size() - 2));  // nothing to decode
   const Json j = Json::parse(token.begin(), token.end(), nullptr, false);
   return j.is_string() ? j.get<std::string>() : std::string(token);
 }

@@ -187,8 +187,10 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
     // Scores to 1/10000 of a point, as the points are (0.1 + 0.2 must sum as a platform shows
     // it). With a scale of credit the test passes when it earns its full points.
     r.score = std::round(t.points * credit * 10000) / 10000;
-    // Full points as shown: a credit a hair under 1 that rounds to them is a pass.
-    r.status = (all_or_nothing ? passed : r.score >= t.points) ? "passed" : "failed";
+    // Full points as shown: a credit a hair under 1 that rounds to them is a pass (a test of
+    // no points passes on its full credit alone).
+    const bool full = credit >= 1 || (t.points > 0 && r.score >= t.points);
+    r.status = (all_or_nothing ? passed : full) ? "passed" : "failed";
     if (m->max_abs == 0) {
       r.message = "identical to the reference";
     } else {
