@@ -3,6 +3,7 @@
 // size too), 2 when an image cannot be read.
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 
 #include <nlohmann/json.hpp>
@@ -54,8 +55,15 @@ Runner add_compare(CLI::App& app) {
                    "file name (.png or .ppm)\n";
       return kBadInput;
     }
+    // The heat map's format is its name's: a name without .png or .ppm says neither.
+    const std::string ext = std::filesystem::path(args->diff).extension().string();
+    const std::string unnamed =
+        !args->diff.empty() && ext.empty()
+            ? "'" + args->diff + "' has no extension: name the heat map .png or .ppm"
+            : "";
     if (!args->diff.empty())
-      for (const std::string& bad : {check_output(args->diff, ""), check_not_input(args->diff, {args->a, args->b})})
+      for (const std::string& bad : {unnamed, check_output(args->diff, ""),
+                                     check_not_input(args->diff, {args->a, args->b})})
         if (!bad.empty()) {
           std::cerr << "rayfarm: --diff: " << bad << "\n";
           return kBadInput;

@@ -1,5 +1,6 @@
 // The command line's own words: help footers, range checks that name the option and the
 // accepted range, and CLI11's parse errors rephrased ("--width given twice").
+#include <charconv>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -98,14 +99,15 @@ CLI::Option* int_range(CLI::Option* option, long long lo, long long hi) {
   return option
       ->check(CLI::Validator(
           [lo, hi, range](std::string& v) -> std::string {
+            // As strict as number_range and the render options: digits with an optional sign,
+            // no spaces around them (std::stoll took " 5" and refused "5 ").
             long long n = 0;
-            size_t used = 0;
-            try {
-              n = std::stoll(v, &used);
-            } catch (const std::exception&) {
-              used = 0;
-            }
-            if (used == 0 || used != v.size() || n < lo || n > hi)
+            const char* first = v.data() + (v.starts_with('+') ? 1 : 0);
+            const char* last = v.data() + v.size();
+            const auto [end, ec] = std::from_chars(first, last, n);
+            const bool whole =
+                ec == std::errc() && end == last && first != last && !v.starts_with("+-");
+            if (!whole || n < lo || n > hi)
               return "must be an integer in " + range + ", got '" + v + "'";
             return "";
           },

@@ -637,6 +637,12 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
         "--threads: must be an integer in 0..1024, got '2000'");
   usage("compare a.png b.png --threshold 300",
         "--threshold: must be an integer in 0..255, got '300'");
+  // Spaces around an integer are refused on either side, as around every other number.
+  usage("compare a.png b.png --threshold ' 5'", "--threshold: must be an integer in 0..255, got ' 5'");
+  usage("compare a.png b.png --threshold '5 '", "--threshold: must be an integer in 0..255, got '5 '");
+  usage("compare a.png b.png --threshold +-5", "--threshold: must be an integer in 0..255, got '+-5'");
+  usage("compare a.png b.png --diff heatmap",
+        "--diff: 'heatmap' has no extension: name the heat map .png or .ppm");
   usage("compare a.png b.png --diff -",
         "--diff: the report goes to standard output; give the heat map a file name (.png or .ppm)");
   usage("compare a.png b.png --diff d.jpg",
