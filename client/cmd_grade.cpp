@@ -456,7 +456,7 @@ Runner add_grade(CLI::App& app) {
       if (args->freeze) outputs.emplace_back("--lock", lock_file);
       for (const auto& [flag, out] : outputs) {
         std::vector<std::string> read = inputs;
-        if (!args->freeze || flag == "-o") read.push_back(args->freeze ? "-" : lock_file);
+        if (!args->freeze) read.push_back(lock_file);  // read, to check the references
         if (std::string clash = check_not_input(out, read); !clash.empty()) {
           std::cerr << "rayfarm: " << flag << " " << clash << "\n";
           return true;
