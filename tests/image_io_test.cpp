@@ -49,14 +49,18 @@ void put_chunk(std::string& png, std::string_view type, std::string_view data,
 
 // A PNG built by hand, so that colour types the encoder never produces can be tested.
 // `rows` are the raw scanlines, each with its leading filter byte.
+// `palette`, when given, is written as a PLTE chunk before the data.
 std::string make_png(std::uint32_t width, std::uint32_t height, int bit_depth, int colour_type,
-                     std::string_view rows) {
+                     std::string_view rows, std::string_view palette = {}, int interlace = 0) {
   std::string png("\x89PNG\r\n\x1a\n", 8);
   std::string ihdr;
   put_be32(ihdr, width);
   put_be32(ihdr, height);
-  ihdr += {static_cast<char>(bit_depth), static_cast<char>(colour_type), 0, 0, 0};
+  ihdr += {static_cast<char>(bit_depth), static_cast<char>(colour_type), 0, 0,
+           static_cast<char>(interlace)};
   put_chunk(png, "IHDR", ihdr, 13);
+  if (!palette.empty())
+    put_chunk(png, "PLTE", palette, static_cast<std::uint32_t>(palette.size()));
   std::string idat = zlib(rows);
   put_chunk(png, "IDAT", idat, static_cast<std::uint32_t>(idat.size()));
   put_chunk(png, "IEND", "", 0);
@@ -341,6 +345,140 @@ TEST(ImageIo, PngChunkClaimingGigabytesIsRefused) {
   put_chunk(hostile, "IDAT", "short", 0x7ffffff0);
   EXPECT_EQ(decode_error(hostile),
             "cannot decode PNG: data larger than its size");  // not even tried
+}
+
+
+// Damage the format can detect is refused, as libpng refuses it, with where it is: stb_image
+// alone decoded these to whatever pixels the damage left.
+TEST(ImageIo, ACriticalChunkFailingItsCrcIsRefused) {
+  const std::vector<unsigned char> good = encode_png(random_image(9, 7, 5));
+  std::string png(view(good));
+  png[33 + 8 + 5] ^= 0x10;  // a byte of the image data (IDAT follows the signature and IHDR)
+  EXPECT_EQ(decode_error(png),
+            "corrupt PNG: chunk IDAT at byte 33 fails its CRC check (the file is damaged)");
+  png = std::string(view(good));
+  png[16 + 3] ^= 1;  // the width
+  EXPECT_EQ(decode_error(png),
+            "corrupt PNG: chunk IHDR at byte 8 fails its CRC check (the file is damaged)");
+}
+
+TEST(ImageIo, AnAncillaryChunkFailingItsCrcIsSkipped) {
+  const Image image = random_image(9, 7, 5);
+  const std::vector<unsigned char> good = encode_png(image);
+  std::string png(view(good).substr(0, 33));
+  put_be32(png, 5);
+  png += std::string("tEXtab\0cd", 9);
+  put_be32(png, 12345);  // not the CRC
+  png += view(good).substr(33);
+  EXPECT_EQ(decode_ok(png), image);
+}
+
+TEST(ImageIo, TheImageDatasAdler32IsChecked) {
+  const std::string rows("\0\x01\x02\x03\0\x04\x05\x06", 8);
+  std::string data = zlib(rows);
+  data.back() ^= 1;  // the stream's Adler-32 ends it
+  std::string png = make_png(1, 2, 8, 2, rows);
+  std::string damaged = png.substr(0, 33);
+  put_chunk(damaged, "IDAT", data, static_cast<std::uint32_t>(data.size()));
+  put_chunk(damaged, "IEND", "", 0);
+  EXPECT_EQ(decode_error(damaged), "corrupt PNG: the image data does not inflate (its zlib "
+                                   "stream is damaged or fails its Adler-32 check)");
+  EXPECT_EQ(decode_ok(png).rgb, (std::vector<std::uint8_t>{1, 2, 3, 4, 5, 6}));
+}
+
+TEST(ImageIo, HeaderFieldsTheFormatDoesNotHaveAreNamed) {
+  const std::string rows("\0\x01\x02\x03", 4);
+  EXPECT_EQ(decode_error(make_png(1, 1, 4, 2, rows)),
+            "corrupt PNG: bit depth 4 is not allowed with colour type 2 (RGB): 8 or 16");
+  EXPECT_EQ(decode_error(make_png(1, 1, 16, 3, rows)),
+            "corrupt PNG: bit depth 16 is not allowed with colour type 3 (palette): 1, 2, 4 or 8");
+  EXPECT_EQ(decode_error(make_png(1, 1, 8, 5, rows)),
+            "corrupt PNG: colour type 5 does not exist (0, 2, 3, 4 or 6)");
+  EXPECT_EQ(decode_error(make_png(1, 1, 8, 2, rows, {}, 2)),
+            "corrupt PNG: interlace method 2 does not exist (0 or 1)");
+  EXPECT_EQ(decode_error(make_png(1, 1, 8, 2, std::string("\x05\x01\x02\x03", 4))),
+            "corrupt PNG: row 0 has filter type 5, which does not exist (0-4)");
+  EXPECT_EQ(decode_error(make_png(2, 2, 8, 2, std::string(7, '\0'))),
+            "corrupt PNG: the image data holds 7 bytes of the 14 its size needs");
+  EXPECT_EQ(decode_error(make_png(1, 1, 8, 3, std::string(2, '\0'))),
+            "corrupt PNG: a palette image (colour type 3) has no PLTE chunk");
+}
+
+unsigned char paeth_of(int a, int b, int c) {
+  const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+  return static_cast<unsigned char>(pa <= pb && pa <= pc ? a : pb <= pc ? b : c);
+}
+
+// The scanlines of a palette image, packed at `depth` bits, each row filtered with the next
+// of the five filter types in turn; Adam7's passes when `interlaced`.
+std::string palette_rows(int width, int height, int depth, const std::vector<int>& index,
+                         bool interlaced) {
+  struct Pass {
+    int x0, y0, dx, dy;
+  };
+  const std::vector<Pass> passes =
+      interlaced ? std::vector<Pass>{{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
+                                     {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}}
+                 : std::vector<Pass>{{0, 0, 1, 1}};
+  std::string out;
+  int filter = 0;
+  for (const Pass& p : passes) {
+    const int w = width > p.x0 ? (width - p.x0 + p.dx - 1) / p.dx : 0;
+    const int h = height > p.y0 ? (height - p.y0 + p.dy - 1) / p.dy : 0;
+    if (w == 0 || h == 0) continue;
+    std::string prev;
+    for (int j = 0; j < h; ++j) {
+      std::string row((w * depth + 7) / 8, '\0');
+      for (int i = 0; i < w; ++i) {
+        const int bit = i * depth, v = index[(p.y0 + j * p.dy) * width + p.x0 + i * p.dx];
+        row[bit / 8] = static_cast<char>(row[bit / 8] | v << (8 - depth - bit % 8));
+      }
+      out += static_cast<char>(filter);
+      for (std::size_t k = 0; k < row.size(); ++k) {
+        const int x = static_cast<unsigned char>(row[k]);
+        const int a = k ? static_cast<unsigned char>(row[k - 1]) : 0;
+        const int b = prev.empty() ? 0 : static_cast<unsigned char>(prev[k]);
+        const int c = k && !prev.empty() ? static_cast<unsigned char>(prev[k - 1]) : 0;
+        const int predicted = filter == 1 ? a : filter == 2 ? b : filter == 3 ? (a + b) / 2
+                              : filter == 4 ? paeth_of(a, b, c) : 0;
+        out += static_cast<char>(x - predicted);
+      }
+      prev = row;
+      filter = (filter + 1) % 5;
+    }
+  }
+  return out;
+}
+
+// Every index is checked against the palette, through every filter type, at every bit depth,
+// interlaced or not; an index past it is named with its pixel.
+TEST(ImageIo, PaletteIndicesPastThePaletteAreRefusedWithTheirPixel) {
+  std::mt19937 rng(7);
+  for (int depth : {1, 2, 4, 8}) {
+    for (bool interlaced : {false, true}) {
+      SCOPED_TRACE("depth " + std::to_string(depth) + (interlaced ? ", interlaced" : ""));
+      const int width = 13, height = 11, colours = depth == 1 ? 1 : (1 << depth) - 1;
+      std::string palette;
+      for (int i = 0; i < colours * 3; ++i) palette += static_cast<char>(rng() & 0xff);
+      std::vector<int> index(width * height);
+      for (int& v : index) v = static_cast<int>(rng() % colours);
+      const Image image =
+          decode_ok(make_png(width, height, depth, 3,
+                             palette_rows(width, height, depth, index, interlaced), palette,
+                             interlaced));
+      ASSERT_EQ(image.rgb.size(), index.size() * 3);
+      for (std::size_t i = 0; i < index.size(); ++i)
+        for (int k = 0; k < 3; ++k)
+          ASSERT_EQ(image.rgb[i * 3 + k], static_cast<unsigned char>(palette[index[i] * 3 + k]));
+      index[5 * width + 7] = colours;
+      EXPECT_EQ(decode_error(make_png(width, height, depth, 3,
+                                      palette_rows(width, height, depth, index, interlaced),
+                                      palette, interlaced)),
+                "corrupt PNG: palette index " + std::to_string(colours) +
+                    " at pixel (7, 5) is past the palette's " + std::to_string(colours) +
+                    " colours");
+    }
+  }
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <new>
 #include <stdexcept>
 
+#include "image/png_check.h"
 #include "image/stb_wrappers.h"
 
 namespace rayfarm {
@@ -89,6 +90,7 @@ std::optional<Image> decode_png(std::string_view bytes, std::string* error, long
   std::uint64_t height = read_be32(bytes, 20);
   if (auto problem = size_problem(width, height, max_pixels)) return fail(error, *problem);
   if (bytes.size() > INT_MAX) return fail(error, "PNG file too large to decode");
+  if (auto problem = png_integrity_problem(bytes)) return fail(error, *problem);
   auto cleaned = without_empty_idats(bytes);
   if (cleaned) bytes = *cleaned;
   // No legitimate stb allocation exceeds twice the input (the IDAT buffer doubles) or twice
