@@ -188,8 +188,16 @@ class LocalBackend final : public Backend {
       *error = "cannot read scene '" + path + "': " + why;
       return std::nullopt;
     }
-    return load_scene_files(path, *text, FileResolver::beside(file.string()), file.string(), error);
+    auto files =
+        load_scene_files(path, *text, FileResolver::beside(file.string()), file.string(), error);
+    if (files)
+      for (const auto& [texture, bytes] : files->textures)
+        textures_read_.push_back((file.parent_path() / texture).string());
+    return files;
   }
+
+  // The texture files the scenes read, beside them: inputs the result may not be written over.
+  const std::vector<std::string>& textures_read() const { return textures_read_; }
 
   std::optional<Image> render(const SceneFiles& scene, const RenderOptions& options,
                               std::string* error) override {
@@ -348,6 +356,7 @@ class LocalBackend final : public Backend {
   const GradeArgs& args_;
   fs::path base_;
   fs::path cache_;
+  std::vector<std::string> textures_read_;
 };
 
 fs::path lock_path(const GradeArgs& args) {
@@ -516,12 +525,36 @@ Runner add_grade(CLI::App& app) {
     GradeSettings settings;
     settings.hints = !args->no_hints && !args->freeze;
     settings.threads = args->threads;
+    const fs::path lock = lock_path(*args);
+    std::error_code ec;
+    if (!args->freeze && (!args->lock.empty() || fs::exists(lock, ec))) {
+      // Checked once the references are had and before the student's program runs: graded
+      // against references that are not the frozen ones, the tests' feedback would mislead,
+      // so the result says only why nothing was graded.
+      settings.check_references = [&lock](const GradeResult& had) -> std::string {
+        std::string unread;
+        auto lock_text = read_input(lock.string(), &unread);
+        nlohmann::json lock_doc = lock_text ? nlohmann::json::parse(*lock_text, nullptr, false)
+                                            : nlohmann::json();
+        std::vector<std::string> problems;
+        if (!lock_text) problems = {"the lock file cannot be read: " + unread};
+        else if (lock_doc.is_discarded()) problems = {"the lock file is not JSON"};
+        else problems = check_lock(had, lock_doc);
+        if (problems.empty()) return "";
+        for (const std::string& p : problems) std::cerr << "rayfarm: " << p << "\n";
+        const std::string more = problems.size() > 1
+                                     ? " (and " + std::to_string(problems.size() - 1) + " more)"
+                                     : "";
+        return "the references are not the ones in " + lock.string() + ": " + problems.front() +
+               more;
+      };
+    }
     result = grade(*assignment, backend, settings);
+    if (refused_output(backend.textures_read())) return kBadInput;
 
     // The platform shows the students a result; the grader's own trouble goes to its log.
     for (const TestResult& t : result.tests)
       if (t.status == "error") std::cerr << "rayfarm: test '" << t.name << "': " << t.message << "\n";
-    const fs::path lock = lock_path(*args);
     if (args->freeze) {
       int errors = 0;
       for (const TestResult& t : result.tests)
@@ -534,28 +567,6 @@ Runner add_grade(CLI::App& app) {
       if (!write_output(lock.string(), body.data(), body.size())) return kBadInput;
       std::cerr << "rayfarm: froze " << result.tests.size() << " references in " << lock.string() << "\n";
       return kOk;
-    }
-    std::error_code ec;
-    if (!args->lock.empty() || fs::exists(lock, ec)) {
-      std::string unread;
-      auto lock_text = read_input(lock.string(), &unread);
-      nlohmann::json lock_doc = lock_text ? nlohmann::json::parse(*lock_text, nullptr, false)
-                                          : nlohmann::json();
-      std::vector<std::string> problems;
-      if (!lock_text) problems = {"the lock file cannot be read: " + unread};
-      else if (lock_doc.is_discarded()) problems = {"the lock file is not JSON"};
-      else problems = check_lock(result, lock_doc);
-      if (!problems.empty()) {
-        set_grader_error(result, "the references are not the ones in " + lock.string() + ": " +
-                                     problems.front() +
-                                     (problems.size() > 1 ? " (and " + std::to_string(problems.size() - 1) + " more)" : ""));
-        for (const std::string& p : problems) std::cerr << "rayfarm: " << p << "\n";
-        // Graded against references that are not the frozen ones, the tests' feedback would
-        // mislead: the result says only why nothing was graded.
-        result.tests.clear();
-        emit(*args, result, *format);
-        return kBadInput;
-      }
     }
     if (!emit(*args, result, *format)) return kBadInput;
     if (!result.error.empty()) return kBadInput;  // written for the platform, said above

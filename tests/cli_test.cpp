@@ -167,6 +167,15 @@ TEST_F(GradeCli, ALockFileRefusesChangedReferences) {
   EXPECT_NE(refused["error"].get<std::string>().find("test 'A glint'"), std::string::npos);
   // Nothing graded: no test shows feedback measured against the changed reference.
   EXPECT_TRUE(refused["tests"].empty()) << refused.dump();
+  // Nor is the student's program run: the lock is checked once the references are had.
+  const fs::path ran = dir_ / "ran";
+  const std::string program = " --run " + q("touch " + ran.string());
+  Json not_run = grade(assignment + program, 2);
+  EXPECT_TRUE(not_run["tests"].empty()) << not_run.dump();
+  EXPECT_FALSE(fs::exists(ran));
+  fs::remove(dir_ / "lab1.lock.json");  // without the lock, the same grade runs it
+  grade(assignment + program);
+  EXPECT_TRUE(fs::exists(ran));
 }
 
 // The result and a frozen lock never go over what the grade reads: the assignment, a test's
@@ -219,6 +228,20 @@ TEST_F(GradeCli, OutputsNeverOverwriteTheGradesInputs) {
                 q((dir_ / "ada/result.json").string()) + cache_)
                 .code,
             0);
+  // A texture a test's scene reads is an input as well.
+  fs::copy(RAYFARM_SOURCE_DIR "/scenes/textures.txt", dir_ / "scenes/textures.txt");
+  fs::copy(RAYFARM_SOURCE_DIR "/scenes/textures", dir_ / "scenes/textures");
+  std::ofstream(dir_ / "textured.json")
+      << R"({"name": "t", "tests": [{"name": "bricks", "scene": "scenes/textures.txt",
+                                     "image": "textures.png"}]})";
+  const fs::path texture = dir_ / "scenes/textures/bricks.ppm";
+  const std::string before_texture = bytes(texture);
+  Outcome textured = run(kRayfarm + " grade " + q((dir_ / "textured.json").string()) + images +
+                         " -o " + q(texture.string()) + cache_ + " 2>&1");
+  EXPECT_EQ(textured.code, 2) << textured.out;
+  EXPECT_NE(textured.out.find("itself: writing it would lose that file"), std::string::npos)
+      << textured.out;
+  EXPECT_EQ(bytes(texture), before_texture);
 }
 
 // A test whose scene has errors is the instructor's to fix: nothing is graded (exit 2, a

@@ -150,6 +150,11 @@ struct GradeSettings {
   RenderOptions base;  // before the scene's and the test's options (a server's default profile)
   bool hints = true;
   int threads = 0;  // for the per-pixel records of hints (0: all cores)
+  // Called once every reference is had, before any student's image is asked for (a `--run`
+  // program is run): the tests with their names and references' hashes and keys, or the
+  // message of one that has none. A non-empty answer stops the grade there, as a grader
+  // error saying it, with no tests (e.g. a lock the references do not match).
+  std::function<std::string(const GradeResult& references)> check_references;
 };
 
 // Grades every test. A test whose reference cannot be had (its scene has errors, its

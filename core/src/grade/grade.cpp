@@ -90,7 +90,8 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
   struct Reference {
     RenderOptions options;
     std::optional<Image> image;
-    std::string error;  // why there is none
+    std::string sha256, key;  // of the image, and of what it was rendered from
+    std::string error;        // why there is none
   };
   std::vector<Reference> references;
   for (const TestSpec& t : assignment.tests) {
@@ -115,7 +116,32 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
     }
     std::string error;
     ref.image = backend.render(*scene, ref.options, &error);
-    if (!ref.image) ref.error = "the reference could not be rendered: " + error;
+    if (!ref.image) {
+      ref.error = "the reference could not be rendered: " + error;
+      continue;
+    }
+    ref.sha256 = sha256_of_image(*ref.image);
+    ref.key = reference_key(*scene, ref.options);
+  }
+  if (settings.check_references) {
+    GradeResult had;
+    had.assignment = assignment.name;
+    for (std::size_t k = 0; k < assignment.tests.size(); ++k) {
+      TestResult& r = had.tests.emplace_back();
+      r.name = assignment.tests[k].name;
+      if (!references[k].image) {
+        r.status = "error";
+        r.message = references[k].error;
+        continue;
+      }
+      r.reference_sha256 = references[k].sha256;
+      r.reference_key = references[k].key;
+    }
+    if (std::string why = settings.check_references(had); !why.empty()) {
+      for (const TestSpec& t : assignment.tests) out.max_score += t.points;
+      set_grader_error(out, why);
+      return out;
+    }
   }
   for (std::size_t k = 0; k < assignment.tests.size(); ++k) {
     const TestSpec& t = assignment.tests[k];
@@ -142,8 +168,8 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
     }
     const std::optional<SceneFiles>& scene = scenes[t.scene];
     const RenderOptions& options = references[k].options;
-    r.reference_sha256 = sha256_of_image(*reference);
-    r.reference_key = reference_key(*scene, options);
+    r.reference_sha256 = references[k].sha256;
+    r.reference_key = references[k].key;
 
     StudentImage student = backend.student(t, &*scene);
     r.student_note = student.note;
