@@ -1,6 +1,7 @@
 // POST /compare: two uploaded images, or a scene (with its textures) rendered here against an
 // uploaded image, compared pixel by pixel; the numbers as JSON or, with diff=1, the difference
 // image. Its options come from the query or from form fields, and unknown ones are refused.
+#include <charconv>
 #include <cmath>
 #include <optional>
 #include <set>
@@ -96,14 +97,16 @@ void post_compare(Service& svc, const Request& req, Response& res) {
   Params render_params;
   for (const auto& [k, v] : fields) {
     if (k == "threshold") {
-      try {
-        size_t used = 0;
-        int t = std::stoi(v, &used);
-        if (used != v.size() || t < 0 || t > 255) throw 0;
-        options.threshold = t;
-      } catch (...) {
-        return send_error(res, invalid_option(k, "threshold must be an integer in 0..255"));
-      }
+      // As the render options read integers: digits after an optional '+', nothing around.
+      std::string_view digits(v);
+      if (digits.starts_with('+')) digits.remove_prefix(1);
+      int t = -1;
+      const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), t);
+      if (digits.empty() || ec != std::errc() || end != digits.data() + digits.size() || t < 0 ||
+          t > 255)
+        return send_error(res, invalid_option(k, "threshold must be an integer in 0..255, got '" +
+                                                     v.substr(0, 40) + "'"));
+      options.threshold = t;
     } else if (k == "neighborhood" || k == "diff") {
       const std::optional<bool> on = switch_value(v);
       if (!on)

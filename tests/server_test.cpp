@@ -1484,6 +1484,17 @@ TEST(ServerCompare, OptionsComeFromFormFieldsAndUnknownOnesAreRefused) {
     EXPECT_FALSE(error_of(r)["path"].get<std::string>().empty()) << query;
   }
   EXPECT_EQ(c->Post("/compare?diff=0&neighborhood=no", same)->status, 200);
+  // Numbers as the render options read them: no spaces around, in a field or in the query.
+  for (const char* value : {" 5", "5 ", "\t5", "+-5", "0x5", "5.0"}) {
+    httplib::MultipartFormDataItems spaced = same;
+    spaced.push_back({"threshold", value, "", ""});
+    auto r = c->Post("/compare", spaced);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 400) << "[" << value << "]";
+    EXPECT_EQ(error_of(r)["path"], "threshold") << "[" << value << "]";
+  }
+  EXPECT_EQ(c->Post("/compare?threshold=%205", same)->status, 400);
+  EXPECT_EQ(json_of(c->Post("/compare?threshold=%2B5", same))["threshold"], 5);
   httplib::MultipartFormDataItems twice = same;
   twice.push_back({"a", png_bytes(b), "a2.png", "image/png"});
   auto dup = c->Post("/compare", twice);
