@@ -225,6 +225,11 @@ class LocalBackend final : public Backend {
     return image;
   }
 
+  // An image as the assignment names it: its path within the student's folder.
+  std::string shown(const fs::path& file) const {
+    return file.lexically_relative(args_.images).generic_string();
+  }
+
   StudentImage student(const TestSpec& test, const SceneFiles* scene) override {
     if (!args_.run.empty()) return run(test, scene);
     StudentImage s;
@@ -239,7 +244,7 @@ class LocalBackend final : public Backend {
       for (const std::string& name : other_image_names(test.image)) {
         const fs::path other = fs::path(args_.images) / name;
         if (fs::is_regular_file(other, ec)) {
-          s.note = "graded " + other.filename().string() + ": no " + test.image + " was found";
+          s.note = "graded " + name + ": no " + test.image + " was found";
           file = other;
           break;
         }
@@ -261,13 +266,13 @@ class LocalBackend final : public Backend {
     const fs::path real = fs::canonical(file, real_ec);
     const auto [stop, rest] = std::mismatch(folder.begin(), folder.end(), real.begin(), real.end());
     if (folder_ec || real_ec || stop != folder.end()) {
-      s.error = "your image " + file.filename().string() + " is a link to a file outside your folder";
+      s.error = "your image " + shown(file) + " is a link to a file outside your folder";
       return s;
     }
     std::string error;
     auto bytes = read_input(file.string(), &error);
     if (bytes) s.image = decode_image(*bytes, &error);
-    if (!s.image) s.error = "your image " + file.filename().string() + " cannot be read: " + error;
+    if (!s.image) s.error = "your image " + shown(file) + " cannot be read: " + error;
     return s;
   }
 

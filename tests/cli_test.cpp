@@ -400,6 +400,27 @@ TEST_F(GradeCli, LinksOfEveryKindAreNoImage) {
   EXPECT_EQ(dangling["tests"][3]["message"], "your image glint.png is a link to a file that does not exist");
 }
 
+// An image in a folder of the student's is named with that folder, as the assignment names it.
+TEST_F(GradeCli, AnImageInASubfolderIsNamedWithIt) {
+  fs::copy(kLab + "/scenes", dir_ / "scenes");
+  std::ofstream(dir_ / "sub.json")
+      << R"({"name": "s", "tests": [{"name": "glint", "scene": "scenes/glint.txt",
+                                     "image": "part2/glint.png"}]})";
+  fs::create_directories(dir_ / "ada/part2");
+  std::ofstream(dir_ / "ada/part2/glint.png") << "not an image";
+  Json j = grade(q((dir_ / "sub.json").string()) + " --images " + q((dir_ / "ada").string()));
+  EXPECT_EQ(j["tests"][0]["message"].get<std::string>().rfind(
+                "your image part2/glint.png cannot be read: ", 0),
+            0u)
+      << j["tests"][0]["message"];
+  fs::remove(dir_ / "ada/part2/glint.png");
+  std::ofstream(dir_ / "ada/part2/glint.ppm") << "P3 1 1 255 0 0 0";
+  Json other = grade(q((dir_ / "sub.json").string()) + " --images " + q((dir_ / "ada").string()));
+  EXPECT_NE(other.dump().find("graded part2/glint.ppm: no part2/glint.png was found"),
+            std::string::npos)
+      << other.dump();
+}
+
 TEST_F(GradeCli, AssignmentErrorsArePlaced) {
   std::ofstream(dir_ / "bad.json") << R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "pionts": 2}]})";
   Outcome r = run(kRayfarm + " grade " + q((dir_ / "bad.json").string()) + " --images . 2>&1");
