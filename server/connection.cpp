@@ -228,7 +228,7 @@ bool GuardedServer::client_gone() { return current && farm::socket_closed_by_pee
 
 void GuardedServer::close_after(httplib::Response& res) {
   if (current) current->close_after = true;
-  res.set_header("Connection", "close");
+  if (res.get_header_value("Connection") != "close") res.set_header("Connection", "close");
 }
 
 bool GuardedServer::process_and_close_socket(socket_t sock) {

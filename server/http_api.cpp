@@ -276,7 +276,10 @@ void HttpApi::harden() {
 
   server_.set_logger([this](const Request& req, const Response& res) {
     double ms = std::chrono::duration<double, std::milli>(Clock::now() - request_start).count();
-    service_.metrics().request(route_label(req.method, req.path), res.status);
+    // A method the library does not take leaves the path unparsed: the target's says it.
+    const std::string path =
+        req.path.empty() ? req.target.substr(0, req.target.find('?')) : req.path;
+    service_.metrics().request(route_label(req.method, path), res.status);
     if (service_.settings().access_log) {
       // When, what, the answer, and who: by roster name where there is one.
       char when[32];

@@ -95,6 +95,8 @@ void get_job_image(Service& svc, const Request& req, Response& res) {
     auto image = svc.current_image(*job);
     if (!image) return send_error(res, 410, "expired", "the result has expired");
     res.set_header("X-Job-State", std::string(to_string(state)));
+    // The same address shows more of the image as tiles finish: no cache may keep one.
+    res.set_header("Cache-Control", "no-store");
     return send_image(res, *image, wants_ppm(req, *job));
   }
   if (state == JobState::done) {

@@ -116,8 +116,11 @@ void post_render(Service& svc, const Request& req, Response& res) {
   }
   Submitted sub = svc.submit(text, params, client_of(req), textures, how);
   if (sub.error) {
-    // `curl -d @scene.txt` strips the newlines: the first comment then swallows the file.
-    if (req.has_header(kFormEncodedMark) && sub.error.status == 400 &&
+    // `curl -d @scene.txt` strips the newlines: the first comment then swallows a model
+    // file. (A JSON scene on one line is fine, and an option's error is not the scene's.)
+    const std::size_t first = text.find_first_not_of(" \t\r");
+    if (req.has_header(kFormEncodedMark) && sub.error.code == "invalid_scene" &&
+        first != std::string::npos && text[first] != '{' &&
         text.find('\n') == std::string::npos && text.size() > 40)
       sub.error.message += " (the scene arrived as one line: curl -d removes newlines; send "
                            "the file with --data-binary @FILE)";

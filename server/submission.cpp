@@ -161,12 +161,29 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
   if (!names_priority(query) && !names_priority(scene->render))
     options.priority = how.default_priority;
   apply_options(options, query, diags);
-  if (!diags.has_errors())
-    if (std::string conflict = profile_conflict(options); !conflict.empty())
-      diags.error("bad-option", conflict, {0, 0, "profile"});
+  if (!diags.has_errors()) {
+    std::string option;
+    if (std::string conflict = profile_conflict(options, &option); !conflict.empty()) {
+      // Placed where the option the profile refuses was given: the query's parameter, else
+      // the scene's render block, else (the server's default profile) its name.
+      Where at{0, 0, option};
+      const auto given = [&option, &at](const OptionSet& set) {
+        for (const auto& o : set)
+          if (const OptionSpec* spec = find_option(o.name); spec && spec->name == option) {
+            at = o.where;
+            return true;
+          }
+        return false;
+      };
+      if (!given(query)) given(scene->render);
+      diags.error("bad-option", conflict, at);
+    }
+  }
   if (diags.has_errors()) {
     const Diagnostic* d = diags.first_error();
     ApiError e = api_error(400, "invalid_option", d->message);
+    e.line = d->where.line;
+    e.column = d->where.column;
     e.path = d->where.path;
     return {std::nullopt, e};
   }

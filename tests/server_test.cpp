@@ -422,6 +422,16 @@ TEST(ServerRender, MultipartScenePartIsAccepted) {
   auto page = c->Get("/", {{"Accept", "TEXT/HTML"}});
   ASSERT_TRUE(page);
   EXPECT_EQ(page->get_header_value("Content-Type"), "text/html; charset=utf-8");
+  // A weight of 0 is "not acceptable" (RFC 9110 §12.4.2): the route list, not the page.
+  for (const char* accept : {"text/html;q=0, application/json", "text/html; q=0.000",
+                             "application/json, text/html ;q=0"}) {
+    auto list = c->Get("/", {{"Accept", accept}});
+    ASSERT_TRUE(list);
+    EXPECT_EQ(list->get_header_value("Content-Type"), "application/json") << accept;
+  }
+  auto weighed = c->Get("/", {{"Accept", "application/json;q=0.5, text/html;q=0.1"}});
+  ASSERT_TRUE(weighed);
+  EXPECT_EQ(weighed->get_header_value("Content-Type"), "text/html; charset=utf-8");
 
   httplib::MultipartFormDataItems wrong = {{"model", kScene, "scene.txt", "text/plain"}};
   auto bad = c->Post("/render", wrong);
@@ -704,6 +714,7 @@ TEST(ServerJobs, ImageIs409WhileRunningAndPartialShowsProgress) {
   ASSERT_EQ(partial->status, 200);
   EXPECT_EQ(partial->get_header_value("Content-Type"), "image/png");
   EXPECT_EQ(partial->get_header_value("X-Job-State"), "running");
+  EXPECT_EQ(partial->get_header_value("Cache-Control"), "no-store");  // it grows as tiles finish
   Image image = decode_or_fail(partial->body);
   EXPECT_EQ(image.width, 800);
   EXPECT_EQ(image.height, 600);
@@ -1111,6 +1122,22 @@ TEST(ServerProfiles, DefaultProfileAppliesWhenNeitherRequestNorSceneNamesOne) {
                                        "application/json");
   EXPECT_EQ(status_of(*c, from_query.id)["options"]["profile"], "cpsc102");
   EXPECT_EQ(from_query.png, plain.png);
+
+  // An option the profile refuses is placed where it was given, whatever gave the profile
+  // (this server's default is cpsc102).
+  auto refused = [&](const std::string& query, const std::string& body, const char* type) {
+    auto r = c->Post("/render?" + query, body, type);
+    EXPECT_TRUE(r && r->status == 400) << query << (r ? r->body : "");
+    return r ? error_of(r) : Json();
+  };
+  EXPECT_EQ(refused("seed=4294967296", scene_json(), "application/json")["path"], "seed");
+  EXPECT_EQ(refused("profile=cpsc102&precision=float", scene_json(), "application/json")["path"],
+            "precision");
+  EXPECT_EQ(refused("profile=cpsc102", scene_json_with(R"({"bailout": 0.5})"),
+                    "application/json")["path"],
+            "/render/bailout");
+  // The server's default profile (this one's) with the query's option: the option.
+  EXPECT_EQ(refused("highlight=blinn", kScene, "text/plain")["path"], "highlight");
 }
 
 TEST(ServerProfiles, DefaultProfileIsAFlagAndAnEnvironmentVariable) {
@@ -1560,6 +1587,25 @@ TEST(ServerRoutes, CurlDashDAndImagesAreNamed) {
   EXPECT_EQ(r->status, 400);
   EXPECT_NE(error_of(r)["message"].get<std::string>().find("--data-binary"), std::string::npos)
       << r->body;
+  // Not for an option's error (the scene without its comments is fine on one line), nor for a
+  // JSON scene, which may well be on one line.
+  std::string valid_line;
+  std::istringstream lines{std::string(kScene)};
+  for (std::string line; std::getline(lines, line);)
+    if (line.find('#') == std::string::npos) valid_line += line + " ";
+  auto option = c->Post("/render?wait=1&spp=abc", valid_line, "application/x-www-form-urlencoded");
+  ASSERT_TRUE(option);
+  EXPECT_EQ(error_of(option)["code"], "invalid_option");
+  EXPECT_EQ(error_of(option)["message"].get<std::string>().find("--data-binary"),
+            std::string::npos)
+      << option->body;
+  std::string json_line = Json::parse(scene_json()).dump();
+  json_line.insert(json_line.size() - 1, ", \"bogus\": 1");
+  auto json = c->Post("/render?wait=1", json_line, "application/x-www-form-urlencoded");
+  ASSERT_TRUE(json);
+  EXPECT_EQ(json->status, 400);
+  EXPECT_EQ(error_of(json)["message"].get<std::string>().find("--data-binary"), std::string::npos)
+      << json->body;
   auto png = c->Post("/render?wait=1", png_bytes(gradient(4, 4)), "application/octet-stream");
   ASSERT_TRUE(png);
   EXPECT_EQ(png->status, 400);
@@ -1912,6 +1958,7 @@ TEST(ServerGrade, APartWithoutANameIsABadBody) {
     EXPECT_EQ(r->status, 400) << route;
     EXPECT_EQ(error_of(r)["code"], "bad_multipart") << route << r->body;
     EXPECT_EQ(r->get_header_value("Connection"), "close") << route;
+    EXPECT_EQ(r->get_header_value_count("Connection"), 1u) << route;
   }
 }
 
@@ -2819,6 +2866,9 @@ TEST(ServerHardening, NoBodyIsTakenForTheNextRequest) {
   const std::string metrics = server.client()->Get("/metrics")->body;
   EXPECT_EQ(metrics.find("injected"), std::string::npos);
   EXPECT_NE(metrics.find("route=\"OTHER other\""), std::string::npos) << metrics.substr(0, 2000);
+  // A method no route takes is counted under its path, as any other method is.
+  EXPECT_NE(metrics.find("route=\"OTHER /render\",code=\"501\""), std::string::npos)
+      << metrics.substr(0, 2000);
 }
 
 // A failed job's image is final: its error, as wait=1 gives it, not "not done, retry".

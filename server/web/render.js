@@ -102,7 +102,11 @@ async function submit({ body, sample }) {
     $('render-job').scrollIntoView({ block: 'nearest', behavior: matchMedia('(prefers-reduced-motion: reduce)').matches ? 'auto' : 'smooth' });
   } catch (err) {
     const d = err instanceof ApiError ? err.detail : {};
-    if (!sample && err.status === 400 && (d.line || d.path || (d.errors && d.errors.length))) {
+    // A place in the scene: a line, or a JSON path (from "/"). An option of the form has its
+    // name as its path, and is no error of the scene.
+    const inScene = d.line || (typeof d.path === 'string' && d.path.startsWith('/')) ||
+      (d.errors && d.errors.length);
+    if (!sample && err.status === 400 && inScene) {
       message('The scene has errors: see below the scene.', true);
       showSceneError(d, body);
     } else {

@@ -180,6 +180,23 @@ test('a bad scene shows each error at its line with a caret under its column', a
   await page.context().close();
 });
 
+test('an option the server refuses is said as the option\'s error, not pinned to the scene', async () => {
+  const page = await openPage(browser, server);
+  await page.getByLabel('Scene', { exact: true }).fill(SCENE);
+  await page.getByLabel('Samples per pixel').fill('1.5');
+  await page.getByRole('button', { name: 'Render', exact: true }).click();
+  const said = page.locator('#render-message');
+  await said.filter({ hasText: 'spp' }).waitFor();
+  const text = await said.textContent();
+  assert.ok(text.includes('option spp must be an integer'), text);
+  assert.ok(!text.includes('The scene has'), text);
+  assert.equal(await page.locator('#scene-error').isHidden(), true);
+  assert.notEqual(await page.getByLabel('Scene', { exact: true }).getAttribute('aria-invalid'), 'true');
+  assert.equal(await page.locator('.job-card').count(), 0);
+  assert.deepEqual(unexpectedErrors(page, [400]), []);
+  await page.context().close();
+});
+
 test('the jobs list shows jobs submitted elsewhere and their states, live', async () => {
   const page = await openPage(browser, server, { hash: '#/jobs' });
   await page.getByRole('heading', { name: 'Your jobs' }).waitFor();
