@@ -51,6 +51,8 @@ Runner add_report(CLI::App& app) {
       "report renders a ladder of spp (1 to 64) against a reference of "
       "--reference-spp";
   args->flags.add_to(app, {{"spp", ladder},
+                           {"precision", "report renders the spp ladder in both precisions"},
+                           {"bailout", "report sweeps bailout itself"},
                            {"format", "report writes report.md, report.csv and report.svg"},
                            {"priority", "priority is a server's queue class; report runs here"},
                            {"target_error", ladder + ", each to the end"},
@@ -99,13 +101,20 @@ Runner add_report(CLI::App& app) {
           std::fflush(stderr);
         });
     if (terminal) std::fprintf(stderr, "\n");
-    std::error_code ec;
-    std::filesystem::create_directories(args->out, ec);
-    if (ec) {
-      std::cerr << "rayfarm: cannot create " << args->out << ": " << ec.message() << "\n";
+    if (!report.error.empty()) {
+      std::cerr << "rayfarm: error: " << report.error << "\n";
       return kBadInput;
     }
+    for (const std::string& note : report.notes) std::cerr << "rayfarm: note: " << note << "\n";
     namespace fs = std::filesystem;
+    // The folder itself is made, not its parents: a mistyped path is an error, not a tree.
+    std::error_code ec;
+    fs::create_directory(args->out, ec);
+    if (ec || !fs::is_directory(args->out, ec)) {
+      std::cerr << "rayfarm: cannot write " << args->out << ": "
+                << (ec ? ec.message() : "it is not a folder") << "\n";
+      return kBadInput;
+    }
     std::string md = report_markdown(report), csv = report_csv(report), svg = report_svg(report);
     if (!write_output((fs::path(args->out) / "report.md").string(), md.data(), md.size()) ||
         !write_output((fs::path(args->out) / "report.csv").string(), csv.data(), csv.size()) ||

@@ -14,6 +14,7 @@ struct TraceArgs {
   std::string scene;
   std::string x, y;  // decimal digits (checked), read here: CLI11 reads 010 as 8
   bool json = false;
+  int samples = 0;  // of a render stopped early: its N of spp N/M
   OptionFlags flags;
 };
 
@@ -37,11 +38,15 @@ Runner add_trace(CLI::App& app) {
   app.add_option("x", args->x, "pixel column, 0 at the left")->required()->check(decimal);
   app.add_option("y", args->y, "pixel row, 0 at the top")->required()->check(decimal);
   app.add_flag("--json", args->json, "print the explanation as JSON");
+  int_range(app.add_option("--samples", args->samples,
+                           "a render stopped early (its summary says spp N/M): follow its first "
+                           "N of --spp M samples"),
+            1, 1 << 30);
   // A render with these stops where its whole image's estimate says: one pixel cannot know
   // that, and its bytes would not be the render's.
   const char* stop_rule =
-      "trace follows a set number of samples; give the --spp the render reached (its summary "
-      "line says spp N/M)";
+      "trace follows a set number of samples; give --spp M --samples N for a render that "
+      "stopped at spp N/M";
   args->flags.add_to(app, {{"format", "trace prints the pixel's bytes, not an image"},
                            {"priority", "priority is a server's queue class; trace runs here"},
                            {"target_error", stop_rule},
@@ -65,13 +70,25 @@ Runner add_trace(CLI::App& app) {
         std::cerr << format_diagnostic(d, display_name(args->scene), *text);
       if (lints.has_errors()) return kBadInput;
     }
+    if (args->samples > options->spp) {
+      std::cerr << "rayfarm: --samples " << args->samples << " is more than the " << options->spp
+                << " samples a pixel of --spp: a render takes at most its spp\n";
+      return kBadInput;
+    }
+    // The scene's own stop rule (a JSON render block) cannot be followed for one pixel.
+    if (args->samples == 0 && (options->target_error > 0 || options->time_limit > 0))
+      std::cerr << "rayfarm: note: the scene's " << (options->target_error > 0 ? "target_error" : "time_limit")
+                << " may stop its render early: trace follows all " << options->spp
+                << " samples; for a render that stopped at spp N/" << options->spp
+                << ", give --samples N\n";
     std::string error;
     const auto explainer = Explainer::create(*loaded->scene, *options, &error);
     if (!explainer) {
       std::cerr << "rayfarm: error: " << error << "\n";
       return kBadInput;
     }
-    const auto explanation = explainer->explain(std::stoi(args->x), std::stoi(args->y), &error);
+    const auto explanation =
+        explainer->explain(std::stoi(args->x), std::stoi(args->y), &error, args->samples);
     if (!explanation) {  // the only refusal left: a pixel outside the image
       std::cerr << "rayfarm: error: " << error << "\n";
       return kBadInput;

@@ -705,11 +705,11 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
   // A pixel is decimal: 010 is pixel 10 (not octal 8), 0x10 is refused.
   // Its bytes would not be the render's: the render stops where the whole image says.
   usage("trace " + scene + " 1 1 --target-error 2",
-        "--target-error: trace follows a set number of samples; give the --spp the render reached "
-        "(its summary line says spp N/M)");
+        "--target-error: trace follows a set number of samples; give --spp M --samples N for a "
+        "render that stopped at spp N/M");
   usage("trace " + scene + " 1 1 --time-limit 1",
-        "--time-limit: trace follows a set number of samples; give the --spp the render reached "
-        "(its summary line says spp N/M)");
+        "--time-limit: trace follows a set number of samples; give --spp M --samples N for a "
+        "render that stopped at spp N/M");
   usage("trace " + scene + " 0x10 1", "x: '0x10' is not a pixel number (decimal digits, from 0)");
   EXPECT_EQ(run(kRayfarm + " trace " + scene + " 010 0").out.rfind("Pixel (10, 0) of ", 0), 0u);
   // Too large for any image is said so, not "not a number".
@@ -1041,6 +1041,70 @@ TEST(ReportCli, TheSppLadderStopsBelowTheReference) {
   }
   EXPECT_GT(swept, 0);
   fs::remove_all(out);
+}
+
+// What the profile refuses is left out with a note, never written as a row of zeros; a
+// reference it refuses is an error; and the output folder's parents must exist.
+TEST(ReportCli, SettingsTheProfileRefusesAreLeftOutAndSaid) {
+  REQUIRE_CLIENT();
+  const fs::path out =
+      fs::temp_directory_path() / ("rayfarm-cli-report-cpsc-" + std::to_string(getpid()));
+  const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/cho.txt");
+  const std::string quick = " -q --runs 1 --max-pixels 300 --reference-spp 4";
+  Outcome r = run(kRayfarm + " report " + scene + quick + " --profile cpsc102 --out " +
+                  q(out.string()) + " 2>&1 >/dev/null");
+  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("rayfarm: note: spp sweep: left out where precision float is not "
+                       "available in the cpsc102 profile"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("rayfarm: note: bailout sweep: left out where bailout is not available"),
+            std::string::npos)
+      << r.out;
+  std::ifstream csv(out / "report.csv");
+  std::string line;
+  std::getline(csv, line);
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    EXPECT_EQ(line.find(",float,"), std::string::npos) << line;
+    EXPECT_NE(line.rfind("bailout,", 0), 0u) << line;
+    EXPECT_EQ(line.find(",0.000,"), std::string::npos) << "a row that took no time: " << line;
+  }
+  EXPECT_GT(rows, 0);
+  std::ifstream md(out / "report.md");
+  const std::string text(std::istreambuf_iterator<char>(md), {});
+  EXPECT_NE(text.find("- Note: bailout sweep: left out"), std::string::npos) << text;
+  fs::remove_all(out);
+
+  Outcome deep = run(kRayfarm + " report " + scene + quick + " --profile cpsc102 " +
+                     "--reference-depth 2000 --out " + q(out.string()) + " 2>&1");
+  EXPECT_EQ(deep.code, 2) << deep.out;
+  EXPECT_NE(deep.out.find("rayfarm: error: the reference cannot be rendered: the cpsc102 "
+                          "profile follows rays at most 1000 bounces deep"),
+            std::string::npos)
+      << deep.out;
+  EXPECT_FALSE(fs::exists(out));
+
+  Outcome raised = run(kRayfarm + " report " + scene + quick + " --reference-depth 1 --out " +
+                       q(out.string()) + " 2>&1 >/dev/null");
+  EXPECT_EQ(raised.code, 0) << raised.out;
+  EXPECT_NE(raised.out.find("rayfarm: note: the reference's max_depth is 8, the renders' own, "
+                            "not 1"),
+            std::string::npos)
+      << raised.out;
+  fs::remove_all(out);
+
+  const fs::path orphan = out / "no" / "such" / "folder";
+  Outcome nowhere = run(kRayfarm + " report " + scene + quick + " --out " + q(orphan.string()) +
+                        " 2>&1 >/dev/null");
+  EXPECT_EQ(nowhere.code, 2) << nowhere.out;
+  EXPECT_NE(nowhere.out.find("cannot write"), std::string::npos) << nowhere.out;
+  EXPECT_FALSE(fs::exists(out));
+  for (const char* flag : {" --precision float", " --bailout 0.2"}) {
+    Outcome refused = run(kRayfarm + " report " + scene + quick + flag + " 2>&1");
+    EXPECT_EQ(refused.code, 2) << flag << refused.out;
+  }
 }
 
 TEST(RayfarmdCli, ABadValueFromTheEnvironmentNamesTheVariable) {

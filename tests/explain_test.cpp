@@ -82,6 +82,41 @@ TEST(Explain, EveryPixelOfEveryBundledSceneExplainsToItsRenderedBytes) {
   }
 }
 
+// A render that target_error stopped early is explained by its first N samples of its spp
+// grid (the summary's spp N/M), not by a render of N samples, whose strata differ.
+TEST(Explain, ARenderStoppedEarlyIsExplainedByItsFirstSamples) {
+  LoadedScene loaded = load_bundled("scenes/cho.txt");
+  ASSERT_TRUE(loaded.scene);
+  RenderOptions o = small();
+  o.spp = 200;
+  o.target_error = 1.3;
+  RenderStats stats;
+  std::string error;
+  const Image image = render_image(*loaded.scene, o, 2, &stats, {}, nullptr, &error);
+  ASSERT_GT(image.width, 0) << error;
+  ASSERT_EQ(stats.stop_reason, "target_error");
+  ASSERT_LT(stats.spp_done, 200);
+  const auto explainer = Explainer::create(*loaded.scene, o, &error);
+  ASSERT_TRUE(explainer) << error;
+  RenderOptions fewer = o;
+  fewer.spp = stats.spp_done;
+  fewer.target_error = 0;
+  const auto as_fewer = Explainer::create(*loaded.scene, fewer, &error);
+  int wrong = 0, differ_as_fewer = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const auto e = explainer->explain(x, y, &error, stats.spp_done);
+      ASSERT_TRUE(e) << error;
+      ASSERT_EQ(static_cast<int>(e->samples.size()), stats.spp_done);
+      const std::array<int, 3> want = test::pixel(image, x, y);
+      wrong += std::array<int, 3>{e->bytes[0], e->bytes[1], e->bytes[2]} != want;
+      const auto f = as_fewer->explain(x, y, &error);
+      differ_as_fewer += std::array<int, 3>{f->bytes[0], f->bytes[1], f->bytes[2]} != want;
+    }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_GT(differ_as_fewer, 0);  // the grid matters: the test could tell them apart
+}
+
 // Past 64 samples a pixel's explanation lists the first 64 and counts the rest in its mean,
 // which still gives the rendered bytes (a million samples once took gigabytes).
 TEST(Explain, ManySamplesAreCountedNotListed) {

@@ -149,8 +149,11 @@ class Explainer {
 
   int width() const;
   int height() const;
-  // As explain_pixel; nullopt with `error` when (x, y) is outside the image.
-  std::optional<PixelExplanation> explain(int x, int y, std::string* error) const;
+  // As explain_pixel; nullopt with `error` when (x, y) is outside the image. `samples` > 0:
+  // the first that many of the `spp` samples only, as a render stopped early by
+  // target_error or time_limit takes them (its summary says spp N/M).
+  std::optional<PixelExplanation> explain(int x, int y, std::string* error,
+                                          int samples = 0) const;
   PixelRecord record(int x, int y) const;  // (x, y) must be in the image
   std::vector<PixelRecord> record_all(int threads) const;
 

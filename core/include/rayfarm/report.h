@@ -44,6 +44,10 @@ struct Report {
   std::vector<ReportRow> rows;
   std::vector<RootErrors> stability;
   std::string stability_note;  // why the table is empty, when it is
+  // What the report left out or changed, and why (a setting the profile refuses, a render
+  // that failed): said in report.md and by the command line.
+  std::vector<std::string> notes;
+  std::string error;  // no report at all: the reference cannot be rendered
 };
 
 using ReportProgress = std::function<void(int done, int total, const std::string& what)>;

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <sstream>
 
 #include "rayfarm/render.h"
@@ -67,18 +68,51 @@ Report run_report(const Scene& scene, const std::string& scene_name, const Rende
   sized.height = h;
   sized.target_error = 0;
   sized.time_limit = 0;
+  // The sweeps set these themselves; outside its own sweep, each is the reference's.
+  if (base.bailout > 0)
+    report.notes.push_back("bailout " + format_number(base.bailout) +
+                           " is not used: the bailout sweep sets it, and the other rows use none");
+  if (base.precision != Precision::f64)
+    report.notes.push_back("precision float is not used: the spp sweep renders both "
+                           "precisions, and the other rows double");
+  sized.bailout = 0;
+  sized.precision = Precision::f64;
   report.width = w;
   report.height = h;
 
+  report.reference = sized;
+  report.reference.spp = settings.reference_spp;
+  report.reference.max_depth = std::max(settings.reference_depth, base.effective_max_depth());
+  if (report.reference.effective_max_depth() != settings.reference_depth)
+    report.notes.push_back("the reference's max_depth is " +
+                           std::to_string(report.reference.effective_max_depth()) +
+                           ", the renders' own, not " +
+                           std::to_string(settings.reference_depth) +
+                           ": a shallower reference would count their deeper bounces as error");
+  if (std::string conflict = profile_conflict(report.reference); !conflict.empty()) {
+    report.error = "the reference cannot be rendered: " + conflict;
+    return report;
+  }
+
   std::vector<RenderOptions> settings_list;
   std::vector<std::string> sweeps;
+  // A setting the profile refuses is left out, said once per reason (not a row of zeros).
+  std::vector<std::string> refused;
+  auto add = [&](const RenderOptions& o, const char* sweep) {
+    if (std::string conflict = profile_conflict(o); !conflict.empty()) {
+      const std::string note = std::string(sweep) + " sweep: left out where " + conflict;
+      if (std::find(refused.begin(), refused.end(), note) == refused.end()) refused.push_back(note);
+      return;
+    }
+    settings_list.push_back(o);
+    sweeps.push_back(sweep);
+  };
   for (Precision p : {Precision::f64, Precision::f32})
     for (int spp : settings.spp) {
       RenderOptions o = sized;
       o.spp = spp;
       o.precision = p;
-      settings_list.push_back(o);
-      sweeps.push_back("spp");
+      add(o, "spp");
     }
   // The depth and bailout sweeps at 16 samples, or the reference's if it has fewer: against
   // a reference of fewer samples, the difference would be the reference's noise.
@@ -88,16 +122,15 @@ Report run_report(const Scene& scene, const std::string& scene_name, const Rende
     RenderOptions o = sized;
     o.max_depth = d;
     o.spp = sweep_spp;
-    settings_list.push_back(o);
-    sweeps.push_back("max_depth");
+    add(o, "max_depth");
   }
   for (double b : settings.bailouts) {
     RenderOptions o = sized;
     o.bailout = b;
     o.spp = sweep_spp;
-    settings_list.push_back(o);
-    sweeps.push_back("bailout");
+    add(o, "bailout");
   }
+  report.notes.insert(report.notes.end(), refused.begin(), refused.end());
 
   const int stability_steps = settings.stability ? 5 : 0;
   const int total = 1 + static_cast<int>(settings_list.size()) + stability_steps;
@@ -106,16 +139,17 @@ Report run_report(const Scene& scene, const std::string& scene_name, const Rende
     if (progress) progress(done, total, what);
   };
 
-  report.reference = sized;
-  report.reference.spp = settings.reference_spp;
-  report.reference.max_depth = std::max(settings.reference_depth, base.effective_max_depth());
-  report.reference.bailout = 0;
-  report.reference.precision = Precision::f64;
   step("reference (spp " + std::to_string(report.reference.spp) + ")");
   auto t0 = std::chrono::steady_clock::now();
-  Image reference = render_image(scene, report.reference, settings.threads);
+  std::string why;
+  Image reference =
+      render_image(scene, report.reference, settings.threads, nullptr, {}, nullptr, &why);
   report.reference_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (reference.width == 0) {
+    report.error = "the reference cannot be rendered: " + why;
+    return report;
+  }
   ++done;
 
   for (size_t i = 0; i < settings_list.size(); ++i) {
@@ -124,18 +158,24 @@ Report run_report(const Scene& scene, const std::string& scene_name, const Rende
     row.options = settings_list[i];
     step(setting_label(row));
     Image image;
-    for (int run = 0; run < std::max(1, settings.runs); ++run) {
+    std::string error;
+    for (int run = 0; run < std::max(1, settings.runs) && error.empty(); ++run) {
       auto start = std::chrono::steady_clock::now();
-      image = render_image(scene, row.options, settings.threads);
+      image = render_image(scene, row.options, settings.threads, nullptr, {}, nullptr, &error);
       row.times_ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
               .count());
     }
-    row.time_ms = median(row.times_ms);
-    std::string error;
-    row.error = compare_images(reference, image, {}, &error).value_or(CompareResult{});
-    report.rows.push_back(row);
     ++done;
+    std::optional<CompareResult> measured;
+    if (image.width > 0) measured = compare_images(reference, image, {}, &error);
+    if (!measured) {
+      report.notes.push_back(setting_label(row) + ": left out, it cannot be rendered: " + error);
+      continue;
+    }
+    row.time_ms = median(row.times_ms);
+    row.error = *measured;
+    report.rows.push_back(row);
   }
   mark_pareto(report.rows);
 
@@ -166,7 +206,10 @@ std::string report_markdown(const Report& r) {
     << ", max_depth " << r.reference.effective_max_depth() << ", double ("
     << fixed(r.reference_ms, 0) << " ms). Times are medians of "
     << (r.rows.empty() ? 0 : r.rows[0].times_ms.size()) << " runs; errors are in 8-bit levels against the reference. **Bold** settings: no other "
-       "setting is both at least as fast and at least as accurate.\n\n"
+       "setting is both at least as fast and at least as accurate.\n\n";
+  for (const std::string& note : r.notes) o << "- Note: " << note << ".\n";
+  if (!r.notes.empty()) o << "\n";
+  o
     << "| sweep | spp | max_depth | bailout | precision | time ms | RMSE | PSNR dB | max | "
        "pixels off > 1 |\n|---|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
   for (const ReportRow& row : r.rows) {

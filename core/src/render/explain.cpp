@@ -317,7 +317,8 @@ std::unique_ptr<Explainer> Explainer::create(const Scene& scene, const RenderOpt
 int Explainer::width() const { return backend_->width(); }
 int Explainer::height() const { return backend_->height(); }
 
-std::optional<PixelExplanation> Explainer::explain(int x, int y, std::string* error) const {
+std::optional<PixelExplanation> Explainer::explain(int x, int y, std::string* error,
+                                                   int samples) const {
   if (x < 0 || y < 0 || x >= width() || y >= height()) {
     if (error)
       *error = "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
@@ -338,7 +339,8 @@ std::optional<PixelExplanation> Explainer::explain(int x, int y, std::string* er
   e.rounding = std::string(to_string(options_.effective_rounding()));
   const std::unique_ptr<SampleTracer> tracer = backend_->tracer();
   Recorder rec;
-  for (int k = 0; k < std::max(1, backend_->spp()); ++k) {
+  const int spp = std::max(1, backend_->spp());
+  for (int k = 0; k < (samples > 0 ? std::min(samples, spp) : spp); ++k) {
     // Past the listed samples only the colour counts: no blockers named, no hits copied.
     if (k == kExplainedSamples) rec.blockers = false;
     const Triple colour = tracer->trace(x, y, k, rec);
