@@ -39,9 +39,9 @@ struct RenderStats {
 // The version of the renderer's output: part of every content key, so a build that renders
 // any byte differently never shares cached results with one that does not. Bump it with
 // every change to pixels (tests/golden_test.cpp pins the bundled scenes' bytes).
-inline constexpr int kRenderVersion = 4;
+inline constexpr int kRenderVersion = 5;
 
-// The largest images a job accepts (the image, and with spp > 1 also 48 bytes of sums per
+// The largest images a job accepts (the image, and with spp > 1 also 72 bytes of sums per
 // pixel, must fit in memory).
 constexpr long long kMaxPixels = 1LL << 28;
 constexpr long long kMaxSupersampledPixels = 1LL << 25;

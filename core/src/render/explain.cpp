@@ -59,11 +59,11 @@ class LectureBackend final : public Explainer::Backend {
       return;
     }
     // One sample per pass, summed in pass order.
-    Triple sum{};
+    Triple sum{}, comp{};
     for (const PathTrace& s : e.samples)
-      for (int i = 0; i < 3; ++i) sum[i] = film_.accumulate(sum[i], s.colour[i]);
+      for (int i = 0; i < 3; ++i) film_.accumulate(sum[i], comp[i], s.colour[i]);
     for (int i = 0; i < 3; ++i) {
-      e.mean[i] = film_.mean(sum[i], static_cast<int>(e.samples.size()));
+      e.mean[i] = film_.mean(sum[i], comp[i], static_cast<int>(e.samples.size()));
       e.bytes[i] = film_.to_byte(e.mean[i]);
     }
   }

@@ -15,13 +15,37 @@ struct Film {
   Rounding rounding = Rounding::nearest;
   bool extended = false;  // cpsc102: sums and the byte in the reference program's arithmetic
 
-  double accumulate(double sum, double c) const {
-    return extended ? static_cast<double>(static_cast<long double>(sum) + c) : sum + c;
+  // Adds sample c to a pixel channel's sum. The lecture keeps the sum exact, `sum` plus
+  // the compensation `comp` (Neumaier), so that the mean of equal samples is that sample
+  // at any spp: a flat colour such as a background of 0.3 (76.5 levels, a tie) would
+  // otherwise round to 76 or 77 by the number of samples. `sum` alone is the plain running
+  // sum. cpsc102 sums as the course's program did, in its extended arithmetic.
+  void accumulate(double& sum, double& comp, double c) const {
+    if (extended) {
+      sum = static_cast<double>(static_cast<long double>(sum) + c);
+      return;
+    }
+    const double t = sum + c;
+    // (An infinite sum, from an emissivity past the doubles, has no rounding to keep.)
+    if (std::isfinite(t)) comp += std::abs(sum) >= std::abs(c) ? (sum - t) + c : (c - t) + sum;
+    sum = t;
   }
-  double mean(double sum, int n) const {
-    if (!extended) return sum / n;
-    const double inv = static_cast<double>(1.0L / n);
-    return static_cast<double>(static_cast<long double>(sum) * inv);
+  // The mean of n samples from their sum: (sum + comp) / n, rounded once (not the rounded
+  // sum divided again, which misses the sample itself for one n in ten).
+  double mean(double sum, double comp, int n) const {
+    if (extended) {
+      const double inv = static_cast<double>(1.0L / n);
+      return static_cast<double>(static_cast<long double>(sum) * inv);
+    }
+    const double q = sum / n;
+    if (!(std::abs(q) < 0x1p995)) return q;  // infinite, or too large to split below
+    // q * n exactly, as p + e (Dekker's product; n < 2^26 needs no split of its own).
+    const double p = q * n;
+    constexpr double kSplit = 134217729.0;  // 2^27 + 1
+    const double big = kSplit * q, qh = big - (big - q), ql = q - qh;
+    const double e = (qh * n - p) + ql * n;
+    const double rest = ((sum - p) - e) + comp;  // sum - p is exact (Sterbenz)
+    return q + rest / n;
   }
   // to_byte of n channels, its choices made once.
   void to_bytes(const double* c, std::size_t n, std::uint8_t* out) const {

@@ -44,6 +44,7 @@ class TiledRender final : public RenderJob {
         prepare_ms_(prepare_ms) {
     if (passes_ > 1) {
       sum_.assign(static_cast<size_t>(p_.width()) * (row1_ - row0_) * 3, 0.0);
+      comp_.assign(sum_.size(), 0.0);
       sum_sq_.assign(sum_.size(), 0.0);
     }
     tile_error_.assign(grid_.count(), 0.0);
@@ -169,9 +170,9 @@ class TiledRender final : public RenderJob {
         size_t i = (static_cast<size_t>(r - row0_) * p_.width() + x) * 3;
         for (int k = 0; k < 3; ++k) {
           double ck = (*c)[k];
-          sum_[i + k] = film_.accumulate(sum_[i + k], ck);
+          film_.accumulate(sum_[i + k], comp_[i + k], ck);
           sum_sq_[i + k] += ck * ck;
-          double mean = film_.mean(sum_[i + k], pass + 1);
+          double mean = film_.mean(sum_[i + k], comp_[i + k], pass + 1);
           *out++ = film_.to_byte(mean);
           if (n >= 2) {
             double var = (sum_sq_[i + k] - sum_[i + k] * (sum_[i + k] / n)) / (n - 1);
@@ -230,7 +231,9 @@ class TiledRender final : public RenderJob {
 
   mutable std::mutex mu_;
   Image image_;                       // rows row0_ to row1_
-  std::vector<double> sum_, sum_sq_;  // per pixel channel of those rows, only with several passes
+  // Per pixel channel of those rows, only with several passes: the sum (film.h), its
+  // compensation, and the sum of squares (the error estimate).
+  std::vector<double> sum_, comp_, sum_sq_;
   std::vector<double> tile_error_;    // per tile: summed squared standard errors, last pass
   int next_tile_ = 0;
   int done_in_pass_ = 0;
