@@ -226,9 +226,13 @@ bool GuardedServer::body_cut_short() { return current && current->body_failed; }
 
 bool GuardedServer::client_gone() { return current && farm::socket_closed_by_peer(current->fd); }
 
-void GuardedServer::close_after(httplib::Response& res) {
+void GuardedServer::close_after(const httplib::Request& req) {
   if (current) current->close_after = true;
-  if (res.get_header_value("Connection") != "close") res.set_header("Connection", "close");
+  // Said by the library, once, as for a request that asked to close (and so without the
+  // Keep-Alive header it would add otherwise); a header of the answer would be a second.
+  auto& headers = const_cast<httplib::Request&>(req).headers;
+  headers.erase("Connection");
+  headers.emplace("Connection", "close");
 }
 
 bool GuardedServer::process_and_close_socket(socket_t sock) {

@@ -47,7 +47,7 @@ class GuardedServer : public httplib::Server {
   // answer, as after any request whose body was not read to its end.
   static bool body_cut_short();
   // This answer is sent without reading the request's body: the connection ends after it.
-  static void close_after(httplib::Response& res);
+  static void close_after(const httplib::Request& req);
   // Whether the client of the request being answered has closed its connection (its end of
   // file is waiting; a pipelined next request is not that): no one will read the answer. A
   // look, no wait; false off a connection's thread.

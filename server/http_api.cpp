@@ -126,7 +126,7 @@ void HttpApi::harden() {
     // so that a client is never asked to send a body that is refused.
     GuardedServer::head_complete();
     if (!refuse(req, res)) return 100;
-    GuardedServer::close_after(res);
+    GuardedServer::close_after(req);
     return res.status;
   });
 
@@ -139,7 +139,7 @@ void HttpApi::harden() {
       // The body (if any) is not read: it must not be taken for the next request.
       if (req.has_header("Transfer-Encoding") || req.get_header_value_count("Content-Length") > 1 ||
           (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0"))
-        GuardedServer::close_after(res);
+        GuardedServer::close_after(req);
       return httplib::Server::HandlerResponse::Handled;
     }
     if (answer_preflight(req, res)) return httplib::Server::HandlerResponse::Handled;
@@ -148,7 +148,7 @@ void HttpApi::harden() {
     if (ApiError e = page ? ApiError{} : ambiguous_query(req.target)) {
       if (req.has_header("Transfer-Encoding") ||
           (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0"))
-        GuardedServer::close_after(res);
+        GuardedServer::close_after(req);
       send_error(res, e);
       return httplib::Server::HandlerResponse::Handled;
     }
@@ -192,7 +192,9 @@ void HttpApi::harden() {
     res.set_header("Access-Control-Allow-Origin", origin);
     res.set_header("Access-Control-Expose-Headers",
                    "Location, Retry-After, ETag, X-Job-Id, X-Job-State, X-Render-Ms, X-Cache, "
-                   "Idempotent-Replayed");
+                   "Idempotent-Replayed, X-Compare-Differing-Pixels, X-Compare-Differing-Fraction, "
+                   "X-Compare-Rmse, X-Compare-Psnr, X-Compare-Max-Abs, X-Compare-Identical, "
+                   "X-Compare-Match");
   });
 
   server_.set_exception_handler([](const Request&, Response& res, std::exception_ptr ep) {
@@ -241,7 +243,7 @@ void HttpApi::harden() {
         }
         // The library's own refusals, said as what they are; the connection ends after each.
         if (GuardedServer::body_cut_short()) {
-          GuardedServer::close_after(res);
+          GuardedServer::close_after(req);
           send_error(res, 408, "request_timeout",
                      "the request body stopped before its Content-Length: it arrived slower "
                      "than 8 KiB a second, or the client stopped sending it");
@@ -251,7 +253,7 @@ void HttpApi::harden() {
                      "the request line or a header could not be read: a malformed line, or "
                      "one longer than 8 KiB");
         } else if (req.is_multipart_form_data()) {
-          GuardedServer::close_after(res);
+          GuardedServer::close_after(req);
           send_error(res, 400, "bad_multipart",
                      "the multipart/form-data body could not be read: each part starts with "
                      "--BOUNDARY (the boundary of its Content-Type) and has a "
@@ -308,7 +310,7 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
   for (const auto& [name, value] : req.headers)
     if (name.find_first_of(" \t") != std::string::npos) {
       send_error(res, 400, "bad_header", "a header's name has white space in it");
-      GuardedServer::close_after(res);
+      GuardedServer::close_after(req);
       return true;
     }
   // A framing header with an empty value is dropped by the library, which then reads no
@@ -317,7 +319,7 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
     if (GuardedServer::empty_header(name)) {
       send_error(res, 400, name == "Content-Length" ? "bad_content_length" : "bad_header",
                  "the request's " + std::string(name) + " header is empty");
-      GuardedServer::close_after(res);
+      GuardedServer::close_after(req);
       return true;
     }
   // Chunked bodies skip the payload limit in this cpp-httplib; compressed ones are inflated
@@ -343,7 +345,7 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
     if (req.get_header_value_count("Content-Length") > 1 || !digits) {
       send_error(res, 400, "bad_content_length",
                  "the request must have one Content-Length, a number of bytes in digits");
-      GuardedServer::close_after(res);
+      GuardedServer::close_after(req);
       return true;
     }
     // The library reads a body for POST, PUT, PATCH and DELETE only: on any other method
@@ -476,7 +478,7 @@ void HttpApi::routes() {
       // The library takes a part without a name (a Content-Disposition with no name="...")
       // as the part "": no route names one, so no route has to tell it from a missing part.
       if (req.is_multipart_form_data() && req.files.count("") > 0) {
-        GuardedServer::close_after(res);
+        GuardedServer::close_after(req);
         return send_error(res, 400, "bad_multipart",
                           "a part of the multipart/form-data body has no name: each part's "
                           "Content-Disposition needs name=\"...\"");

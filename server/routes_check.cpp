@@ -6,6 +6,7 @@
 #include "rayfarm/lint.h"
 #include "rayfarm/load.h"
 #include "routes.h"
+#include "textures.h"
 
 namespace rayfarm::server {
 
@@ -28,12 +29,14 @@ void post_check(Service& svc, const Request& req, Response& res) {
     return;
   const bool course = param_true(req, "course");
   std::string text;
+  TextureFiles textures;  // only their names are checked: a render refuses a part it does not name
   if (req.is_multipart_form_data()) {
     if (!req.has_file("scene"))
       return send_error(res, 400, "missing_scene", "multipart upload without a 'scene' part");
     if (req.files.count("scene") > 1)
       return send_error(res, 400, "duplicate_part", "part 'scene' is sent more than once");
     text = req.get_file_value("scene").content;
+    if (ApiError e = texture_parts(req, {"scene", "course"}, textures)) return send_error(res, e);
   } else {
     text = req.body;
   }
@@ -61,6 +64,9 @@ void post_check(Service& svc, const Request& req, Response& res) {
   // The lints' one error (an image too large for any render) joins the loader's.
   nlohmann::json errors = diagnostics_json(loaded.diags, Severity::error);
   for (const nlohmann::json& e : diagnostics_json(warnings, Severity::error)) errors.push_back(e);
+  if (loaded.scene)
+    if (std::string unnamed = unnamed_part(*loaded.scene, textures); !unnamed.empty())
+      errors.push_back({{"code", "unknown_part"}, {"message", unnamed}});
   nlohmann::json body = {{"ok", loaded.scene.has_value() && errors.empty()},
                          {"format", model ? "model" : "json"},
                          {"errors", std::move(errors)},

@@ -41,6 +41,21 @@ ApiError Service::check_uploads(const TextureFiles& files) const {
 // A part the scene does not name is refused: a misspelt part name would otherwise leave the
 // texture missing with no word about why. Missing and undecodable textures are scene errors
 // at the place that names them.
+std::string unnamed_part(const Scene& scene, const TextureFiles& files) {
+  std::set<std::string_view> named;
+  for (const Texture& t : scene.textures) named.insert(t.path);
+  for (const auto& [path, bytes] : files) {
+    if (named.count(path)) continue;
+    const std::vector<std::string_view> paths(named.begin(), named.end());
+    const std::string near = nearest_word(path, paths);
+    return "part '" + clipped(path) + "' is not a texture the scene names" +
+           (!near.empty()   ? "; did you mean '" + near + "'?"
+            : named.empty() ? " (it names none)"
+                            : "");
+  }
+  return {};
+}
+
 ApiError Service::resolve_uploads(Scene& scene, const TextureFiles& files) const {
   std::set<std::string_view> named;
   for (const Texture& t : scene.textures) named.insert(t.path);
@@ -48,16 +63,8 @@ ApiError Service::resolve_uploads(Scene& scene, const TextureFiles& files) const
     return limit_error("max_textures", "the scene names " + std::to_string(named.size()) +
                                            " texture files; the limit is " +
                                            std::to_string(settings_.max_textures));
-  for (const auto& [path, bytes] : files) {
-    if (named.count(path)) continue;
-    const std::vector<std::string_view> paths(named.begin(), named.end());
-    const std::string near = nearest_word(path, paths);
-    return api_error(400, "unknown_part",
-                     "part '" + clipped(path) + "' is not a texture the scene names" +
-                         (!near.empty()   ? "; did you mean '" + near + "'?"
-                          : named.empty() ? " (it names none)"
-                                          : ""));
-  }
+  if (std::string unnamed = unnamed_part(scene, files); !unnamed.empty())
+    return api_error(400, "unknown_part", unnamed);
   Diagnostics diags;
   if (!resolve_textures(scene, UploadedTextures(files, settings_.max_pixels), diags)) return scene_error(diags);
   return {};

@@ -27,4 +27,8 @@ class UploadedTextures final : public ResourceResolver {
   long long max_pixels_;
 };
 
+// What is wrong with the first uploaded part that `scene` names as no texture: "part 'x' is
+// not a texture the scene names; did you mean 'y'?"; empty when the scene names them all.
+std::string unnamed_part(const Scene& scene, const TextureFiles& files);
+
 }  // namespace rayfarm::server

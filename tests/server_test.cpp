@@ -2197,6 +2197,21 @@ TEST(ServerTextures, PartTheSceneDoesNotNameIs400) {
   ASSERT_TRUE(compare);
   EXPECT_EQ(compare->status, 400);
   EXPECT_EQ(error_of(compare)["code"], "unknown_part");
+
+  // /check says so as the render would refuse it: an error of its answer, not silence.
+  auto checked = c->Post("/check", upload(kTexScene, typo));
+  ASSERT_TRUE(checked);
+  ASSERT_EQ(checked->status, 200) << checked->body;
+  const Json answer = json_of(checked);
+  EXPECT_EQ(answer["ok"], false);
+  bool said = false;
+  for (const Json& error : answer["errors"])
+    said |= error["code"] == "unknown_part" &&
+            contains(error["message"], "did you mean '../images/brick.ppm'");
+  EXPECT_TRUE(said) << answer.dump();
+  auto named = c->Post("/check", upload(kTexScene, tex_files(1, 2)));
+  ASSERT_TRUE(named);
+  EXPECT_EQ(json_of(named)["ok"], true) << named->body;
 }
 
 TEST(ServerTextures, TooManyOrTooLargeTexturesAre422) {
@@ -2678,6 +2693,9 @@ TEST(ServerCors, OnlyTheConfiguredOriginMayCallTheApiWithItsToken) {
   const std::string exposed = r->get_header_value("Access-Control-Expose-Headers");
   EXPECT_NE(exposed.find("Location"), std::string::npos) << exposed;
   EXPECT_NE(exposed.find("Retry-After"), std::string::npos) << exposed;
+  // A grader page reads /compare?diff=1's figures from its headers.
+  for (const char* figure : {"X-Compare-Rmse", "X-Compare-Match", "X-Compare-Differing-Pixels"})
+    EXPECT_NE(exposed.find(figure), std::string::npos) << exposed;
   EXPECT_FALSE(r->has_header("Access-Control-Allow-Credentials"));
   const std::string id = json_of(r)["id"];
   std::string stream;
