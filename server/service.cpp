@@ -2,10 +2,9 @@
 // counted slots of long requests, health, metrics and shutdown.
 #include "service.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <stdexcept>
-
-#include <algorithm>
 
 #include "file_blob_store.h"
 #include "local_job_store.h"
@@ -53,8 +52,13 @@ Service::Service(Settings settings, Backends backends)
   load_samples();
   restore();
   janitor_ = std::thread([this] {
+    // Every 10 s, or a quarter of the results' lifetime when that is shorter: a result is
+    // gone within a quarter of --result-ttl past its time.
+    const double every = settings_.expiry_every > 0 ? settings_.expiry_every
+                                                    : std::min(10.0, settings_.result_ttl / 4);
+    const long long ticks = std::max(1LL, static_cast<long long>(every * 10));  // of 100 ms
     while (!stop_janitor_) {
-      for (int i = 0; i < 100 && !stop_janitor_; ++i)
+      for (long long i = 0; i < ticks && !stop_janitor_; ++i)
         std::this_thread::sleep_for(std::chrono::milliseconds(100));
       if (!stop_janitor_) expire();
     }

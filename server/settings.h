@@ -38,6 +38,9 @@ struct Settings {
   int max_waiting_requests = 32;
   int max_jobs_per_client = 32;  // queued or running at once
   double result_ttl = 24 * 3600;  // seconds a finished job is kept
+  // Seconds between expiry sweeps; 0: 10 s, or a quarter of result_ttl when that is shorter
+  // (no flag: tests that expire by hand set it long).
+  double expiry_every = 0;
   std::uint64_t results_max_bytes = 2ULL << 30;
   std::string samples_dir;
   std::string assignments_dir;  // assignments POST /grade may name

@@ -1190,6 +1190,29 @@ TEST(ServerRestart, FinishedImagesAreServedAfterARestart) {
   EXPECT_EQ(again->get_header_value("X-Cache"), "hit");
 }
 
+// A short --result-ttl is kept to within a quarter of itself: the sweep runs that often.
+TEST(ServerRestart, AShortResultTtlIsKeptWithoutWaitingForTheTenSecondSweep) {
+  TempDir dir;
+  Settings s = test_settings();
+  s.results_dir = dir.path.string();
+  s.result_ttl = 0.5;
+  TestServer server(s);
+  auto c = server.client();
+  auto done = c->Post("/render?wait=1", kScene, "text/plain");
+  ASSERT_TRUE(done);
+  ASSERT_EQ(done->status, 200);
+  const std::string id = done->get_header_value("X-Job-Id");
+  const auto start = Clock::now();
+  int status = 200;
+  while (status != 404 && Clock::now() - start < 5s) {
+    std::this_thread::sleep_for(50ms);
+    status = c->Get("/jobs/" + id)->status;
+  }
+  EXPECT_EQ(status, 404);
+  // Nowhere near the ten seconds of the sweep of a long TTL (0.5 s, then at most 0.125 s).
+  EXPECT_LT(Clock::now() - start, 3s);
+}
+
 // Expiry removes finished jobs past the TTL, and an image only when no kept job names it:
 // a newer cache hit on the same image keeps it readable.
 TEST(ServerRestart, ExpiryKeepsImagesThatKeptJobsStillName) {
@@ -1197,6 +1220,7 @@ TEST(ServerRestart, ExpiryKeepsImagesThatKeptJobsStillName) {
   Settings s = test_settings();
   s.results_dir = dir.path.string();
   s.result_ttl = 0.3;
+  s.expiry_every = 3600;  // expired here by hand, at the moments the test needs
   TestServer server(s);
   auto c = server.client();
   auto first = c->Post("/render?wait=1&spp=2", kScene, "text/plain");
