@@ -222,6 +222,19 @@ bool GuardedServer::empty_header(std::string_view name) {
   return empty;
 }
 
+bool GuardedServer::folded_header() {
+  if (!current) return false;
+  const std::string_view head = current->head;
+  // Each line after the request line, up to the blank line that ends the head.
+  for (std::size_t at = head.find('\n'); at != std::string_view::npos && at + 1 < head.size();
+       at = head.find('\n', at + 1)) {
+    const char first = head[at + 1];
+    if (first == '\r' || first == '\n') break;
+    if (first == ' ' || first == '\t') return true;
+  }
+  return false;
+}
+
 bool GuardedServer::body_cut_short() { return current && current->body_failed; }
 
 bool GuardedServer::client_gone() { return current && farm::socket_closed_by_peer(current->fd); }

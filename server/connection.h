@@ -42,6 +42,9 @@ class GuardedServer : public httplib::Server {
   // Whether the request being answered has a header line `name` (any case) with an empty
   // value, which the library drops: read from the head as it arrived.
   static bool empty_header(std::string_view name);
+  // Whether a header line of the request being answered begins with white space: obsolete
+  // line folding (RFC 9112 §5.2), which a server must refuse or unfold.
+  static bool folded_header();
   // Whether the body of the request being answered stopped before its Content-Length: it
   // fell behind min_body_rate, or the client stopped sending. The connection ends after the
   // answer, as after any request whose body was not read to its end.

@@ -313,6 +313,15 @@ bool HttpApi::refuse(const Request& req, Response& res) const {
       GuardedServer::close_after(req);
       return true;
     }
+  // A header folded onto the line before (RFC 9112 §5.2): refused, as an intermediary that
+  // unfolds it and one that does not would read two different requests.
+  if (GuardedServer::folded_header()) {
+    send_error(res, 400, "bad_header",
+               "a header line begins with white space (obsolete line folding): send each "
+               "header on a line of its own");
+    GuardedServer::close_after(req);
+    return true;
+  }
   // A framing header with an empty value is dropped by the library, which then reads no
   // body: the bytes sent as one would be read as the next request.
   for (const std::string_view name : {"Content-Length", "Transfer-Encoding", "Content-Encoding"})

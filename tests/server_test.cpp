@@ -2868,7 +2868,11 @@ TEST(ServerHardening, NoBodyIsTakenForTheNextRequest) {
            {"POST /check HTTP/1.1\r\nTransfer-Encoding:\r\n", "bad_header"},
            {"GET /healthz HTTP/1.1\r\nContent-Length: " + len + "\r\n", "unexpected_body"},
            {"OPTIONS /jobs HTTP/1.1\r\nContent-Length: " + len + "\r\n", "unexpected_body"},
-           {"POST /check HTTP/1.1\r\nContent-Length : " + len + "\r\n", "bad_header"}}) {
+           {"POST /check HTTP/1.1\r\nContent-Length : " + len + "\r\n", "bad_header"},
+           // Obsolete line folding (RFC 9112 §5.2): refused, not read one way or another.
+           {"POST /check HTTP/1.1\r\nX-A: 1\r\n  folded\r\nContent-Length: " + len + "\r\n",
+            "bad_header"},
+           {"GET /healthz HTTP/1.1\r\nX-A: 1\r\n\tfolded\r\n", "bad_header"}}) {
     RawConnection conn(server.port());
     ASSERT_TRUE(conn.send(head + "Host: 127.0.0.1\r\n\r\n" + smuggled));
     auto r = conn.read_response();
