@@ -205,6 +205,7 @@ std::optional<std::string> FileResolver::read(const std::string& path, std::stri
   const std::filesystem::path file = std::filesystem::path(path).is_absolute()
                                          ? std::filesystem::path(path)
                                          : base_ / path;
+  if (seen_) seen_->push_back(file.string());
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec)) {
     error = file.string() + " is a directory";

@@ -84,9 +84,12 @@ class FileResolver final : public ResourceResolver {
   // Beside the scene file `scene_path` (beside the working directory for "-", stdin).
   static FileResolver beside(const std::string& scene_path);
   std::optional<std::string> read(const std::string& path, std::string& error) const override;
+  // Each file asked for is added to `paths` (whether or not it can be read).
+  void record_into(std::vector<std::string>* paths) { seen_ = paths; }
 
  private:
   std::filesystem::path base_;
+  std::vector<std::string>* seen_ = nullptr;
 };
 
 // Loads and checks a scene file, printing diagnostics. nullopt when it has errors. With

@@ -188,15 +188,13 @@ class LocalBackend final : public Backend {
       *error = "cannot read scene '" + path + "': " + why;
       return std::nullopt;
     }
-    auto files =
-        load_scene_files(path, *text, FileResolver::beside(file.string()), file.string(), error);
-    if (files)
-      for (const auto& [texture, bytes] : files->textures)
-        textures_read_.push_back((file.parent_path() / texture).string());
-    return files;
+    FileResolver textures = FileResolver::beside(file.string());
+    textures.record_into(&textures_read_);
+    return load_scene_files(path, *text, textures, file.string(), error);
   }
 
-  // The texture files the scenes read, beside them: inputs the result may not be written over.
+  // The texture files the scenes asked for (read or not): inputs the result may not be
+  // written over.
   const std::vector<std::string>& textures_read() const { return textures_read_; }
 
   std::optional<Image> render(const SceneFiles& scene, const RenderOptions& options,
@@ -532,11 +530,14 @@ Runner add_grade(CLI::App& app) {
     settings.threads = args->threads;
     const fs::path lock = lock_path(*args);
     std::error_code ec;
+    // Once the references are had, before any student's image is read or program run: the
+    // scenes' textures are known inputs now, and the lock is checked.
+    bool clobbers_texture = false;
+    std::function<std::string(const GradeResult&)> check_lock_file;
     if (!args->freeze && (!args->lock.empty() || fs::exists(lock, ec))) {
-      // Checked once the references are had and before the student's program runs: graded
-      // against references that are not the frozen ones, the tests' feedback would mislead,
-      // so the result says only why nothing was graded.
-      settings.check_references = [&lock](const GradeResult& had) -> std::string {
+      // Graded against references that are not the frozen ones, the tests' feedback would
+      // mislead, so the result says only why nothing was graded.
+      check_lock_file = [&lock](const GradeResult& had) -> std::string {
         std::string unread;
         auto lock_text = read_input(lock.string(), &unread);
         nlohmann::json lock_doc = lock_text ? nlohmann::json::parse(*lock_text, nullptr, false)
@@ -554,8 +555,15 @@ Runner add_grade(CLI::App& app) {
                more;
       };
     }
+    settings.check_references = [&](const GradeResult& had) -> std::string {
+      if (refused_output(backend.textures_read())) {
+        clobbers_texture = true;
+        return "an output would be written over a texture";
+      }
+      return check_lock_file ? check_lock_file(had) : "";
+    };
     result = grade(*assignment, backend, settings);
-    if (refused_output(backend.textures_read())) return kBadInput;
+    if (clobbers_texture) return kBadInput;  // said; nothing is written
 
     // The platform shows the students a result; the grader's own trouble goes to its log.
     for (const TestResult& t : result.tests)

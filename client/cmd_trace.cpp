@@ -70,6 +70,12 @@ Runner add_trace(CLI::App& app) {
         std::cerr << format_diagnostic(d, display_name(args->scene), *text);
       if (lints.has_errors()) return kBadInput;
     }
+    if (args->samples > 0 && args->samples < options->spp &&
+        options->profile == Profile::cpsc102) {
+      std::cerr << "rayfarm: --samples: the cpsc102 profile takes a pixel's samples in one pass, "
+                   "so its renders never stop early; give --spp alone\n";
+      return kBadInput;
+    }
     if (args->samples > options->spp) {
       std::cerr << "rayfarm: --samples " << args->samples << " is more than the " << options->spp
                 << " samples a pixel of --spp: a render takes at most its spp\n";

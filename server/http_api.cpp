@@ -235,6 +235,7 @@ void HttpApi::harden() {
         // A well-formed request whose method the server has no route for at all (BREW,
         // TRACE, CONNECT): 501, as HTTP asks, rather than "bad request".
         if (unserved_method(req)) {
+          GuardedServer::close_after(req);  // its body, if any, is not read
           send_error(res, 501, "not_implemented",
                      "the method " + req.method.substr(0, 16) +
                          " is not implemented: rayfarmd serves GET, HEAD, POST, DELETE and OPTIONS");
@@ -249,6 +250,7 @@ void HttpApi::harden() {
                      "than 8 KiB a second, or the client stopped sending it");
           res.status = 408;
         } else if (!GuardedServer::head_read()) {
+          GuardedServer::close_after(req);
           send_error(res, 400, "http_error",
                      "the request line or a header could not be read: a malformed line, or "
                      "one longer than 8 KiB");
@@ -259,6 +261,7 @@ void HttpApi::harden() {
                      "--BOUNDARY (the boundary of its Content-Type) and has a "
                      "Content-Disposition with a name, and the body ends with --BOUNDARY--");
         } else {
+          GuardedServer::close_after(req);
           send_error(res, 400, "http_error", "the request body could not be read");
         }
         break;

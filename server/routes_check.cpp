@@ -36,7 +36,7 @@ void post_check(Service& svc, const Request& req, Response& res) {
     if (req.files.count("scene") > 1)
       return send_error(res, 400, "duplicate_part", "part 'scene' is sent more than once");
     text = req.get_file_value("scene").content;
-    if (ApiError e = texture_parts(req, {"scene", "course"}, textures)) return send_error(res, e);
+    if (ApiError e = texture_parts(req, {"scene"}, textures)) return send_error(res, e);
   } else {
     text = req.body;
   }

@@ -242,6 +242,17 @@ TEST_F(GradeCli, OutputsNeverOverwriteTheGradesInputs) {
   EXPECT_NE(textured.out.find("itself: writing it would lose that file"), std::string::npos)
       << textured.out;
   EXPECT_EQ(bytes(texture), before_texture);
+  // Said before the student's program runs, and also for a texture that cannot be decoded.
+  std::ofstream(texture, std::ios::trunc) << "P6 not an image";
+  const fs::path ran = dir_ / "ran";
+  Outcome program = run(kRayfarm + " grade " + q((dir_ / "textured.json").string()) +
+                        " --run " + q("touch " + ran.string()) + " -o " + q(texture.string()) +
+                        cache_ + " 2>&1");
+  EXPECT_EQ(program.code, 2) << program.out;
+  EXPECT_NE(program.out.find("itself: writing it would lose that file"), std::string::npos)
+      << program.out;
+  EXPECT_FALSE(fs::exists(ran));
+  EXPECT_EQ(bytes(texture), "P6 not an image");
 }
 
 // A test whose scene has errors is the instructor's to fix: nothing is graded (exit 2, a
@@ -711,6 +722,11 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
         "--time-limit: trace follows a set number of samples; give --spp M --samples N for a "
         "render that stopped at spp N/M");
   usage("trace " + scene + " 0x10 1", "x: '0x10' is not a pixel number (decimal digits, from 0)");
+  usage("trace " + scene + " 1 1 --spp 4 --samples 5",
+        "--samples 5 is more than the 4 samples a pixel of --spp: a render takes at most its spp");
+  usage("trace " + scene + " 1 1 --spp 4 --samples 2 --profile cpsc102",
+        "--samples: the cpsc102 profile takes a pixel's samples in one pass, so its renders never "
+        "stop early; give --spp alone");
   EXPECT_EQ(run(kRayfarm + " trace " + scene + " 010 0").out.rfind("Pixel (10, 0) of ", 0), 0u);
   // Too large for any image is said so, not "not a number".
   usage("trace " + scene + " 1 4294967296",

@@ -28,7 +28,7 @@ TEST(Film, TheMeanOfEqualSamplesIsTheSample) {
 }
 
 // Against the exact mean (in long double, exact for these few samples of the same binade):
-// the mean is the exact one rounded to double.
+// the mean is the exact one rounded once, to the nearest double.
 TEST(Film, TheMeanIsTheExactSumDividedOnce) {
   const Film film;
   std::mt19937_64 rng(12);
@@ -43,16 +43,18 @@ TEST(Film, TheMeanIsTheExactSumDividedOnce) {
       film.accumulate(sum, comp, c);
       exact += c;  // 53-bit values in [0.5, 1): a sum of at most 8 is exact in 64 bits
     }
-    const long double quotient = exact / n;
-    const double below = std::nextafter(static_cast<double>(quotient), 0.0);
-    const double above = std::nextafter(static_cast<double>(quotient), 2.0);
-    const double mean = film.mean(sum, comp, n);
-    // Within the double nearest the exact quotient (the long double division itself rounds).
-    ASSERT_GE(mean, below);
-    ASSERT_LE(mean, above);
-    checked += mean == static_cast<double>(quotient);
+    // The double nearest exact / n: of the candidates around it, the one whose product with
+    // n is nearest the exact sum (each product is exact in 64 bits: 53 bits times 3).
+    const double guess = static_cast<double>(exact / n);
+    double nearest = guess;
+    for (double candidate : {std::nextafter(guess, 0.0), std::nextafter(guess, 2.0)})
+      if (std::abs(exact - static_cast<long double>(candidate) * n) <
+          std::abs(exact - static_cast<long double>(nearest) * n))
+        nearest = candidate;
+    ASSERT_EQ(film.mean(sum, comp, n), nearest) << "n " << n << ", trial " << trial;
+    ++checked;
   }
-  EXPECT_GT(checked, 19900);
+  EXPECT_EQ(checked, 20000);
 }
 
 TEST(Film, AFlatBackgroundKeepsItsByteAtAnySpp) {

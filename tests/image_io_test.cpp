@@ -450,6 +450,47 @@ std::string palette_rows(int width, int height, int depth, const std::vector<int
   return out;
 }
 
+// Image data running past what the image needs is accepted, as decoders accept it, but its
+// Adler-32 and palette indices are checked all the same.
+TEST(ImageIo, DataPastTheImageIsStillChecked) {
+  const std::string palette("\x10\x20\x30", 3);
+  const std::string rows("\0\x00\x00\0\0", 5);  // 2x1 at depth 8, then two bytes more
+  EXPECT_EQ(decode_ok(make_png(2, 1, 8, 3, rows, palette)).rgb,
+            (std::vector<std::uint8_t>{0x10, 0x20, 0x30, 0x10, 0x20, 0x30}));
+  const std::string past("\0\x00\xc8\0\0", 5);
+  EXPECT_EQ(decode_error(make_png(2, 1, 8, 3, past, palette)),
+            "corrupt PNG: palette index 200 at pixel (1, 0) is past the palette's 1 colours");
+  std::string data = zlib(rows);
+  data.back() ^= 1;
+  std::string png = make_png(2, 1, 8, 3, rows, palette);
+  std::string damaged = png.substr(0, png.find("IDAT") - 4);
+  put_chunk(damaged, "IDAT", data, static_cast<std::uint32_t>(data.size()));
+  put_chunk(damaged, "IEND", "", 0);
+  EXPECT_EQ(decode_error(damaged), "corrupt PNG: the image data does not inflate (its zlib "
+                                   "stream is damaged or fails its Adler-32 check)");
+}
+
+// IEND's CRC guards no pixel: a damaged one is no reason to refuse the image. An empty PLTE
+// is said as such.
+TEST(ImageIo, IendsCrcAndAnEmptyPaletteAreSaidAsWhatTheyAre) {
+  const Image image = random_image(5, 4, 9);
+  const std::vector<unsigned char> good = encode_png(image);
+  std::string png(view(good));
+  png[png.size() - 1] ^= 0x55;
+  EXPECT_EQ(decode_ok(png), image);
+  std::string empty("\x89PNG\r\n\x1a\n", 8);
+  std::string ihdr;
+  put_be32(ihdr, 1);
+  put_be32(ihdr, 1);
+  ihdr += {8, 3, 0, 0, 0};
+  put_chunk(empty, "IHDR", ihdr, 13);
+  put_chunk(empty, "PLTE", "", 0);
+  const std::string idat = zlib(std::string(2, '\0'));
+  put_chunk(empty, "IDAT", idat, static_cast<std::uint32_t>(idat.size()));
+  put_chunk(empty, "IEND", "", 0);
+  EXPECT_EQ(decode_error(empty), "corrupt PNG: the PLTE chunk holds no colours");
+}
+
 // Every index is checked against the palette, through every filter type, at every bit depth,
 // interlaced or not; an index past it is named with its pixel.
 TEST(ImageIo, PaletteIndicesPastThePaletteAreRefusedWithTheirPixel) {
@@ -457,11 +498,12 @@ TEST(ImageIo, PaletteIndicesPastThePaletteAreRefusedWithTheirPixel) {
   for (int depth : {1, 2, 4, 8}) {
     for (bool interlaced : {false, true}) {
       SCOPED_TRACE("depth " + std::to_string(depth) + (interlaced ? ", interlaced" : ""));
-      const int width = 13, height = 11, colours = depth == 1 ? 1 : (1 << depth) - 1;
+      // A full palette first: every index is fine, and the pixels are stb's.
+      const int width = 13, height = 11;
       std::string palette;
-      for (int i = 0; i < colours * 3; ++i) palette += static_cast<char>(rng() & 0xff);
+      for (int i = 0; i < (1 << depth) * 3; ++i) palette += static_cast<char>(rng() & 0xff);
       std::vector<int> index(width * height);
-      for (int& v : index) v = static_cast<int>(rng() % colours);
+      for (int& v : index) v = static_cast<int>(rng() % (1 << depth));
       const Image image =
           decode_ok(make_png(width, height, depth, 3,
                              palette_rows(width, height, depth, index, interlaced), palette,
@@ -470,6 +512,10 @@ TEST(ImageIo, PaletteIndicesPastThePaletteAreRefusedWithTheirPixel) {
       for (std::size_t i = 0; i < index.size(); ++i)
         for (int k = 0; k < 3; ++k)
           ASSERT_EQ(image.rgb[i * 3 + k], static_cast<unsigned char>(palette[index[i] * 3 + k]));
+      // Then one colour short, and one pixel naming the missing colour.
+      const int colours = (1 << depth) - 1;
+      palette.resize(colours * 3);
+      for (int& v : index) v = static_cast<int>(rng() % colours);
       index[5 * width + 7] = colours;
       EXPECT_EQ(decode_error(make_png(width, height, depth, 3,
                                       palette_rows(width, height, depth, index, interlaced),

@@ -2,6 +2,7 @@
 // jitter, progressive passes with their stopping rules, cancellation and statistics.
 #include <algorithm>
 #include <atomic>
+#include <new>
 #include <thread>
 
 #include "test_util.h"
@@ -31,6 +32,25 @@ TEST(Render, OutputIsByteIdenticalForAnyThreadCount) {
     o.spp = spp;
     Image one = render(s, o, 1);
     for (int threads : {2, 3, 8}) EXPECT_EQ(render(s, o, threads), one) << "spp " << spp;
+  }
+}
+
+// A failure on a render thread (out of memory, here thrown by the progress callback, which
+// runs on whichever thread finished a tile) reaches the caller once every thread has ended:
+// no terminate, on any thread count.
+TEST(Render, AFailureOnARenderThreadReachesTheCaller) {
+  const Scene scene = test::load_file(RAYFARM_SOURCE_DIR "/scenes/cho.txt").scene.value();
+  RenderOptions o;
+  o.width = 96;
+  o.height = 72;
+  for (int threads : {1, 2, 4}) {
+    std::atomic<int> calls{0};
+    EXPECT_THROW(render_image(scene, o, threads, nullptr,
+                              [&](const RenderStats&) {
+                                if (++calls == 2) throw std::bad_alloc();
+                              }),
+                 std::bad_alloc)
+        << threads;
   }
 }
 

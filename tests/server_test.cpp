@@ -1983,6 +1983,7 @@ TEST(ServerGrade, APartWithoutANameIsABadBody) {
     EXPECT_EQ(error_of(r)["code"], "bad_multipart") << route << r->body;
     EXPECT_EQ(r->get_header_value("Connection"), "close") << route;
     EXPECT_EQ(r->get_header_value_count("Connection"), 1u) << route;
+    EXPECT_FALSE(r->has_header("Keep-Alive")) << route;  // it is closing: none to keep
   }
 }
 
@@ -2890,6 +2891,8 @@ TEST(ServerHardening, NoBodyIsTakenForTheNextRequest) {
     auto r = other.read_response();
     ASSERT_TRUE(r) << method;
     EXPECT_EQ(r->status, 501) << method;
+    EXPECT_EQ(r->header("connection"), "close") << method;
+    EXPECT_FALSE(r->has("keep-alive")) << method;
     EXPECT_EQ(Json::parse(r->body, nullptr, false)["error"]["code"], "not_implemented") << method;
   }
   for (const std::string line : {"BR(EW /render HTTP/1.1", "BREW /render FTP/1.0", "GARBAGE"}) {

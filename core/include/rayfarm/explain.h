@@ -151,7 +151,8 @@ class Explainer {
   int height() const;
   // As explain_pixel; nullopt with `error` when (x, y) is outside the image. `samples` > 0:
   // the first that many of the `spp` samples only, as a render stopped early by
-  // target_error or time_limit takes them (its summary says spp N/M).
+  // target_error or time_limit takes them (its summary says spp N/M; lecture profile only:
+  // cpsc102 takes every sample in one pass).
   std::optional<PixelExplanation> explain(int x, int y, std::string* error,
                                           int samples = 0) const;
   PixelRecord record(int x, int y) const;  // (x, y) must be in the image

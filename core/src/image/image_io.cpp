@@ -90,12 +90,13 @@ std::optional<Image> decode_png(std::string_view bytes, std::string* error, long
   std::uint64_t height = read_be32(bytes, 20);
   if (auto problem = size_problem(width, height, max_pixels)) return fail(error, *problem);
   if (bytes.size() > INT_MAX) return fail(error, "PNG file too large to decode");
-  if (auto problem = png_integrity_problem(bytes)) return fail(error, *problem);
-  auto cleaned = without_empty_idats(bytes);
-  if (cleaned) bytes = *cleaned;
   // No legitimate stb allocation exceeds twice the input (the IDAT buffer doubles) or twice
   // the raw image at its widest (16-bit RGBA plus a filter byte per row; inflate doubles).
   std::size_t alloc_limit = png_alloc_limit(bytes.size(), width, height);
+  if (auto problem = png_integrity_problem(bytes, alloc_limit)) return fail(error, *problem);
+  auto cleaned = without_empty_idats(bytes);
+  if (cleaned) bytes = *cleaned;
+  alloc_limit = png_alloc_limit(bytes.size(), width, height);
   auto png = stb::decode_png_rgb(reinterpret_cast<const unsigned char*>(bytes.data()),
                                  static_cast<int>(bytes.size()), alloc_limit);
   if (png.rgb.empty()) {

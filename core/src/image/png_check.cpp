@@ -2,6 +2,7 @@
 
 #include <libdeflate.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <cstdlib>
@@ -165,15 +166,19 @@ std::string type_text(std::string_view type) {
 
 }  // namespace
 
-std::optional<std::string> png_integrity_problem(std::string_view png) {
+std::optional<std::string> png_integrity_problem(std::string_view png, std::size_t max_inflated) {
   Header h;
   std::string idat;
   std::size_t palette = 0;
-  bool ended = false;
+  bool has_palette = false, ended = false;
   for (std::size_t at = 8; png.size() - at >= 12;) {
     const std::uint32_t length = be32(png, at);
     if (length > png.size() - at - 12) break;  // cut short: the decoder says so
     const std::string_view type = png.substr(at + 4, 4), data = png.substr(at + 8, length);
+    if (type == "IEND") {  // (its CRC guards nothing: the pixels are all before it)
+      ended = true;
+      break;
+    }
     if (libdeflate_crc32(0, png.data() + at + 4, length + 4) != be32(png, at + 8 + length)) {
       // An ancillary chunk (lower-case first letter) is only skipped, as libpng skips it:
       // the pixels do not depend on it.
@@ -185,31 +190,38 @@ std::optional<std::string> png_integrity_problem(std::string_view png) {
       if (auto p = header_problem(data, h)) return p;
     } else if (type == "PLTE") {
       palette = length / 3;
+      has_palette = true;
     } else if (type == "IDAT") {
       idat.append(data);
-    } else if (type == "IEND") {
-      ended = true;
-      break;
     }
     at += 12 + std::size_t{length};
   }
   // Cut short, or no image data: the decoder's messages say so.
   if (!ended || idat.empty() || h.depth == 0) return std::nullopt;
-  if (h.colour == 3 && palette == 0)
+  if (h.colour == 3 && !has_palette)
     return problem("a palette image (colour type 3) has no PLTE chunk");
+  if (h.colour == 3 && palette == 0) return problem("the PLTE chunk holds no colours");
+  // (The caller has bounded the size; this only keeps the sums below from overflowing.)
+  if (h.width * h.height > (std::uint64_t{1} << 40)) return std::nullopt;
 
   std::uint64_t raw_size = 0;
   for (const Pass& p : passes(h)) raw_size += p.height * (1 + h.row_bytes(p.width));
-  // One byte more than the image needs, so that data running past it shows (and is left to
-  // the decoder's own limit).
-  std::unique_ptr<unsigned char[]> raw(new (std::nothrow) unsigned char[raw_size + 1]);
-  if (!raw) return std::nullopt;
   std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor*)> inflater(
       libdeflate_alloc_decompressor(), libdeflate_free_decompressor);
   if (!inflater) return std::nullopt;
+  // Room for one byte more than the image needs; data running on past it (which decoders
+  // accept, as libpng does with a warning) is inflated again into as much room as the
+  // decoder itself would allow, so that its Adler-32 and indices are still checked.
+  std::unique_ptr<unsigned char[]> raw;
   std::size_t used = 0, produced = 0;
-  const libdeflate_result r = libdeflate_zlib_decompress_ex(
-      inflater.get(), idat.data(), idat.size(), raw.get(), raw_size + 1, &used, &produced);
+  libdeflate_result r = LIBDEFLATE_INSUFFICIENT_SPACE;
+  for (const std::uint64_t room : {raw_size + 1, std::max<std::uint64_t>(raw_size + 1, max_inflated)}) {
+    raw.reset(new (std::nothrow) unsigned char[room]);
+    if (!raw) return std::nullopt;
+    r = libdeflate_zlib_decompress_ex(inflater.get(), idat.data(), idat.size(), raw.get(), room,
+                                      &used, &produced);
+    if (r != LIBDEFLATE_INSUFFICIENT_SPACE) break;
+  }
   if (r == LIBDEFLATE_INSUFFICIENT_SPACE) return std::nullopt;
   if (r != LIBDEFLATE_SUCCESS) {
     return problem("the image data does not inflate (its zlib stream is damaged or fails its "

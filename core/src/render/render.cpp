@@ -5,8 +5,10 @@
 
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <mutex>
 #include <optional>
+#include <system_error>
 #include <thread>
 
 #include "render/cpsc102/reference_pipeline.h"
@@ -403,19 +405,36 @@ Image run_job(std::unique_ptr<RenderJob> job, int threads, RenderStats* stats,
               const std::atomic<bool>* cancel) {
   if (!job) return {};
   if (threads <= 0) threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // A failure on any thread (out of memory) stops the job and is rethrown here, once every
+  // thread has ended: never a terminate from a worker or from a joinable thread unwound.
+  std::mutex failed_mu;
+  std::exception_ptr failure;
   auto work = [&] {
-    for (;;) {
-      if (cancel && cancel->load()) job->cancel();
-      RenderJob::Step step = job->run_step();
-      if (step == RenderJob::Step::done) return;
-      if (step == RenderJob::Step::wait) std::this_thread::yield();
-      else if (on_progress) on_progress(job->stats());
+    try {
+      for (;;) {
+        if (cancel && cancel->load()) job->cancel();
+        RenderJob::Step step = job->run_step();
+        if (step == RenderJob::Step::done) return;
+        if (step == RenderJob::Step::wait) std::this_thread::yield();
+        else if (on_progress) on_progress(job->stats());
+      }
+    } catch (...) {
+      {
+        std::lock_guard lock(failed_mu);
+        if (!failure) failure = std::current_exception();
+      }
+      job->cancel();
     }
   };
   std::vector<std::thread> pool;
-  for (int i = 1; i < threads; ++i) pool.emplace_back(work);
+  try {
+    for (int i = 1; i < threads; ++i) pool.emplace_back(work);
+  } catch (const std::system_error&) {
+    // No more threads to be had (a process limit): the ones started share the work.
+  }
   work();
   for (auto& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
   if (stats) *stats = job->stats();
   return job->take_image();
 }
