@@ -83,7 +83,8 @@ Runner add_trace(CLI::App& app) {
     }
     // The scene's own stop rule (a JSON render block) cannot be followed for one pixel.
     if (args->samples == 0 && (options->target_error > 0 || options->time_limit > 0))
-      std::cerr << "rayfarm: note: the scene's " << (options->target_error > 0 ? "target_error" : "time_limit")
+      std::cerr << "rayfarm: note: the scene's "
+                << (options->target_error > 0 ? "target_error" : "time_limit")
                 << " may stop its render early: trace follows all " << options->spp
                 << " samples; for a render that stopped at spp N/" << options->spp
                 << ", give --samples N\n";

@@ -93,7 +93,8 @@ struct Pass {
 std::vector<Pass> passes(const Header& h) {
   if (h.interlace == 0) return {{0, 0, 1, 1, h.width, h.height}};
   static constexpr std::array<std::array<int, 4>, 7> kAdam7{
-      {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4}, {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}}};
+      {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
+       {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}}};
   std::vector<Pass> out;
   for (const auto& [x0, y0, dx, dy] : kAdam7) {
     const std::uint64_t w = h.width > static_cast<std::uint64_t>(x0)
@@ -215,7 +216,8 @@ std::optional<std::string> png_integrity_problem(std::string_view png, std::size
   std::unique_ptr<unsigned char[]> raw;
   std::size_t used = 0, produced = 0;
   libdeflate_result r = LIBDEFLATE_INSUFFICIENT_SPACE;
-  for (const std::uint64_t room : {raw_size + 1, std::max<std::uint64_t>(raw_size + 1, max_inflated)}) {
+  const std::uint64_t most = std::max<std::uint64_t>(raw_size + 1, max_inflated);
+  for (const std::uint64_t room : {raw_size + 1, most}) {
     raw.reset(new (std::nothrow) unsigned char[room]);
     if (!raw) return std::nullopt;
     r = libdeflate_zlib_decompress_ex(inflater.get(), idat.data(), idat.size(), raw.get(), room,

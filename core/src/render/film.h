@@ -17,9 +17,10 @@ struct Film {
 
   // Adds sample c to a pixel channel's sum. The lecture keeps the sum as `sum` plus the
   // compensation `comp` (Neumaier's: exact unless samples far apart in size cancel), so that
-  // the mean of equal samples is that sample at any spp: a flat colour such as a background of 0.3 (76.5 levels, a tie) would
-  // otherwise round to 76 or 77 by the number of samples. `sum` alone is the plain running
-  // sum. cpsc102 sums as the course's program did, in its extended arithmetic.
+  // the mean of equal samples is that sample at any spp: a flat colour such as a background
+  // of 0.3 (76.5 levels, a tie) would otherwise round to 76 or 77 by the number of samples.
+  // `sum` alone is the plain running sum. cpsc102 sums as the course's program did, in its
+  // extended arithmetic.
   void accumulate(double& sum, double& comp, double c) const {
     if (extended) {
       sum = static_cast<double>(static_cast<long double>(sum) + c);
