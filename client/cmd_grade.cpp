@@ -174,6 +174,12 @@ class LocalBackend final : public Backend {
   LocalBackend(const GradeArgs& args, fs::path base) : args_(args), base_(std::move(base)) {
     if (!args.no_cache) cache_ = args.cache.empty() ? default_cache() : fs::path(args.cache);
   }
+  ~LocalBackend() override {
+    std::error_code ec;
+    if (!run_dir_.empty()) fs::remove_all(run_dir_, ec);
+  }
+  LocalBackend(const LocalBackend&) = delete;
+  LocalBackend& operator=(const LocalBackend&) = delete;
 
   std::optional<SceneFiles> scene(const std::string& path, std::string* error) override {
     const fs::path file = base_ / path;
@@ -293,8 +299,17 @@ class LocalBackend final : public Backend {
     StudentImage s;
     const bool to_file = args_.run.find("{out}") != std::string::npos;
     std::error_code ec;
-    const fs::path dir = fs::temp_directory_path() / ("rayfarm-grade-" + std::to_string(getpid()));
-    fs::create_directories(dir, ec);
+    // A folder of this grade's own (mkdtemp: new, private), not a name another user could
+    // have made, or linked elsewhere, beforehand; removed when the grade ends.
+    if (run_dir_.empty()) {
+      std::string templ = (fs::temp_directory_path() / "rayfarm-grade-XXXXXX").string();
+      if (!::mkdtemp(templ.data())) {
+        s.error = "the grader could not make a folder for your program's image";
+        return s;
+      }
+      run_dir_ = templ;
+    }
+    const fs::path& dir = run_dir_;
     const fs::path out = dir / fs::path(test.image).filename();
     fs::remove(out, ec);
     const fs::path scene_path = fs::absolute(base_ / (scene ? scene->path : test.scene), ec);
@@ -359,6 +374,7 @@ class LocalBackend final : public Backend {
   const GradeArgs& args_;
   fs::path base_;
   fs::path cache_;
+  fs::path run_dir_;  // where --run programs write their images
   std::vector<std::string> textures_read_;
 };
 
@@ -540,19 +556,15 @@ Runner add_grade(CLI::App& app) {
       check_lock_file = [&lock](const GradeResult& had) -> std::string {
         std::string unread;
         auto lock_text = read_input(lock.string(), &unread);
-        nlohmann::json lock_doc = lock_text ? nlohmann::json::parse(*lock_text, nullptr, false)
-                                            : nlohmann::json();
+        if (!lock_text) {
+          std::cerr << "rayfarm: the lock file cannot be read: " << unread << "\n";
+          return "the references are not the ones in " + lock.string() +
+                 ": the lock file cannot be read: " + unread;
+        }
         std::vector<std::string> problems;
-        if (!lock_text) problems = {"the lock file cannot be read: " + unread};
-        else if (lock_doc.is_discarded()) problems = {"the lock file is not JSON"};
-        else problems = check_lock(had, lock_doc);
-        if (problems.empty()) return "";
+        std::string mismatch = lock_mismatch(had, *lock_text, lock.string(), &problems);
         for (const std::string& p : problems) std::cerr << "rayfarm: " << p << "\n";
-        const std::string more = problems.size() > 1
-                                     ? " (and " + std::to_string(problems.size() - 1) + " more)"
-                                     : "";
-        return "the references are not the ones in " + lock.string() + ": " + problems.front() +
-               more;
+        return mismatch;
       };
     }
     settings.check_references = [&](const GradeResult& had) -> std::string {

@@ -235,6 +235,8 @@ void post_grade(Service& svc, const Request& req, Response& res) {
                       "assignment=NAME for one stored on the server)");
   std::string text;
   std::unique_ptr<Files> files;
+  std::optional<std::string> lock;  // a stored assignment's lock, when it has one
+  std::string lock_name;
   // An uploaded assignment is a file part, or a field holding JSON (curl -F 'assignment=<x');
   // a field holding a plain name names a stored one.
   const auto uploaded = req.files.find("assignment");
@@ -262,13 +264,20 @@ void post_grade(Service& svc, const Request& req, Response& res) {
                         "this server stores no assignments (rayfarmd --assignments-dir)");
     std::string error;
     FolderFiles folder(dir);
+    // (NAME.lock.json beside NAME.json is its lock, not an assignment of its own.)
+    const bool a_lock = name.size() >= 5 && name.compare(name.size() - 5, 5, ".lock") == 0;
     std::optional<std::string> stored =
-        plain_name(name) ? folder.read(name + ".json", error) : std::nullopt;
+        plain_name(name) && !a_lock ? folder.read(name + ".json", error) : std::nullopt;
     if (!stored)
       return send_error(res, 404, "unknown_assignment",
                         "no assignment named '" + name.substr(0, 64) + "' on this server");
     text = *stored;
     files = std::make_unique<FolderFiles>(dir);
+    // A stored assignment frozen with `rayfarm grade --freeze` is checked against its lock,
+    // as the command line checks it: references that differ grade nothing.
+    std::string no_lock;
+    lock = folder.read(name + ".lock.json", no_lock);
+    lock_name = name + ".lock.json";
   } else {
     return send_error(res, 400, "bad_request",
                       "upload the assignment as a file part named 'assignment', or name a "
@@ -304,6 +313,11 @@ void post_grade(Service& svc, const Request& req, Response& res) {
   settings.base.profile = svc.settings().default_profile;
   settings.hints = hints;
   settings.threads = 1;  // the hints' per-pixel record runs on this request's thread only
+  if (lock) {
+    settings.check_references = [&lock, &lock_name](const GradeResult& had) {
+      return lock_mismatch(had, *lock, lock_name);
+    };
+  }
   GradeResult result = grade(*assignment, backend, settings);
   res.status = 200;
   res.set_content(write_result(result, format), content_type(format));

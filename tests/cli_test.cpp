@@ -335,6 +335,23 @@ TEST_F(GradeCli, AStudentsProgramUnderRun) {
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
   EXPECT_EQ(slow["score"], 0);
   EXPECT_EQ(slow["tests"][0]["message"], "your program ran past the time limit of 0.5 s and was stopped");
+  // {out} lies in a folder of the grade's own, private and new (not one another user could
+  // have made or linked beforehand), which is gone when the grade ends, leftovers and all.
+  const fs::path record = dir_ / "where";
+  Json placed = grade(assignment + " --run " +
+                      q("d=$(dirname {out}); echo $(stat -c %a \"$d\") \"$d\" >> " +
+                        record.string() + "; cp " +
+                        ada + "/$(basename {scene} .txt).png {out}; touch \"$(dirname {out})/left\""));
+  EXPECT_EQ(placed["score"], 10);
+  std::ifstream lines(record);
+  std::string mode, folder;
+  int runs = 0;
+  while (lines >> mode >> folder) {
+    ++runs;
+    EXPECT_EQ(mode, "700") << folder;
+    EXPECT_FALSE(fs::exists(folder)) << folder;
+  }
+  EXPECT_EQ(runs, 4);
 }
 
 // --fail-under compares exactly: 57 of 100 points is not below 57%.

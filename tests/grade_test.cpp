@@ -225,7 +225,7 @@ TEST(Assignment, ErrorsArePlacedByTheirJsonPath) {
   // A whole number past int's range is no 0 or 1 (4294967297 was read as 1).
   for (const char* n : {"4294967297", "-4294967295", "18446744073709551615", "2"})
     EXPECT_EQ(first_error(std::string(R"({"name": "x", "tests": [{"name": "a", "scene": "a.txt", "neighborhood": )") + n + "}]}"),
-              "/tests/0/neighborhood: must be 0 or 1") << n;
+              "/tests/0/neighborhood: must be 0 or 1 (or false or true)") << n;
   // Syntax errors have a line and column.
   EXPECT_EQ(first_error("{\"name\": \"x\",\n  \"tests\": [\n    {\"name\": \"a\" \"scene\": 1}]}").substr(0, 2), "3:");
   // So does a number past double's range (it threw out of the parser: the grader aborted).
@@ -308,6 +308,15 @@ TEST(Grade, CreditRulesGivePartialPoints) {
   EXPECT_EQ(forgiven.status, "passed");
   TestResult fraction = grade_one(off, R"(, "points": 10, "max_bad_fraction": 1)");
   EXPECT_EQ(fraction.status, "passed");
+  // A limit that prints as the share that failed it is said in pixels: 100 of 3072 pixels
+  // (3.26%) differ, and up to 99.996 may.
+  Image hundred = ref;
+  for (int i = 0; i < 100; ++i)
+    hundred.rgb[i * 3] = static_cast<std::uint8_t>(hundred.rgb[i * 3] < 128 ? 200 : 20);
+  TestResult close = grade_one(hundred, R"(, "points": 10, "max_bad_fraction": 0.032551)");
+  EXPECT_EQ(close.status, "failed");
+  EXPECT_NE(close.message.find("(3.26%; up to 99 pixels may)"), std::string::npos)
+      << close.message;
 }
 
 // With a scale of credit, full points are a pass whatever max_bad_fraction says (it belongs to
@@ -548,6 +557,15 @@ TEST(Formats, GradescopeResults) {
   EXPECT_EQ(j["tests"][1]["output_format"], "md");
   EXPECT_NE(j["tests"][1]["output"].get<std::string>().find("[rounding]"), std::string::npos);
   EXPECT_EQ(j["tests"][2]["score"], 0);
+  // The top-level output, which students always see, gives no total while a test is hidden
+  // from them (the total less the visible tests would be its score).
+  const std::string top = j["output"];
+  EXPECT_EQ(top.find("points"), std::string::npos) << top;
+  EXPECT_EQ(top.rfind("Lab <1> & \"co\" (rayfarm render version ", 0), 0u) << top;
+  GradeResult shown = mixed_result();
+  for (TestResult& t : shown.tests) t.visibility = "visible";
+  const std::string all = Json::parse(write_result(shown, Format::gradescope))["output"];
+  EXPECT_NE(all.find(": 2 / 6 points"), std::string::npos) << all;
 }
 
 TEST(Formats, PrairieLearnResults) {

@@ -1910,6 +1910,33 @@ TEST(ServerGrade, AStoredAssignmentIsNamedAndItsFolderIsAFence) {
   ASSERT_TRUE(two);
   EXPECT_EQ(two->status, 400) << two->body;
   EXPECT_EQ(error_of(two)["code"], "invalid_option");
+
+  // A stored assignment's lock (NAME.lock.json, as --freeze writes it) is checked as the
+  // command line checks it: references that differ grade nothing. The lock is no assignment.
+  TempDir dir;
+  std::filesystem::copy(RAYFARM_SOURCE_DIR "/scenes/assignments/lab1", dir.path,
+                        std::filesystem::copy_options::recursive);
+  Settings locked = test_settings();
+  locked.assignments_dir = dir.path.string();
+  TestServer frozen(locked);
+  auto f = frozen.client();
+  for (const std::string& lock :
+       {std::string(R"({"render_version": 5, "tests": {"Two spheres on a floor": )"
+                    R"({"reference_sha256": "00", "reference_key": "x"}}})"),
+        std::string("{ not json")}) {
+    std::ofstream(dir.path / "lab1.lock.json") << lock;
+    auto checked = f->Post("/grade?assignment=lab1", images);
+    ASSERT_TRUE(checked);
+    ASSERT_EQ(checked->status, 200) << checked->body;
+    const Json answer = Json::parse(checked->body);
+    EXPECT_EQ(answer["score"], 0) << answer.dump();
+    EXPECT_TRUE(answer["tests"].empty()) << answer.dump();
+    EXPECT_EQ(answer["error"].get<std::string>().rfind(
+                  "the references are not the ones in lab1.lock.json: ", 0),
+              0u)
+        << answer.dump();
+  }
+  EXPECT_EQ(f->Post("/grade?assignment=lab1.lock", images)->status, 404);
 }
 
 TEST(ServerGrade, AssignmentErrorsAre400WithTheirPath) {

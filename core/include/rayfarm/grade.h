@@ -180,6 +180,10 @@ std::vector<Hint> find_hints(const Image& reference, const Image& student,
 nlohmann::json lock_json(const GradeResult& result);
 // Empty when `result` has the references the lock names; else what changed, per test.
 std::vector<std::string> check_lock(const GradeResult& result, const nlohmann::json& lock);
+// The grader error of a lock file's text `lock`, named `name` in it: empty when `result` has
+// the references the lock names. Each problem also goes to `problems`.
+std::string lock_mismatch(const GradeResult& result, const std::string& lock,
+                          const std::string& name, std::vector<std::string>* problems = nullptr);
 
 enum class Format { gradescope, prairielearn, autolab, junit, json, html, md };
 std::optional<Format> parse_format(std::string_view name);

@@ -161,7 +161,7 @@ class Reader {
       const Json& n = o["neighborhood"];
       if (n.is_boolean()) t.neighborhood = n.get<bool>();
       else if (n.is_number_integer() && (n == 0 || n == 1)) t.neighborhood = n == 1;
-      else error(path + "/neighborhood", "must be 0 or 1");
+      else error(path + "/neighborhood", "must be 0 or 1 (or false or true)");
     }
     if (o.contains("max_bad_fraction"))
       t.max_bad_fraction = number(o["max_bad_fraction"], path + "/max_bad_fraction", 0, 1).value_or(0);

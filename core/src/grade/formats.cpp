@@ -175,9 +175,12 @@ Json test_json(const TestResult& t) {
   return j;
 }
 
-std::string header_text(const GradeResult& r) {
-  std::string out = r.assignment + ": " + fixed(r.score) + " / " + fixed(r.max_score) +
-                    " points (rayfarm render version " + std::to_string(kRenderVersion) + ")\n";
+// `with_points` false: no total, which would tell the scores of tests the students do not see.
+std::string header_text(const GradeResult& r, bool with_points = true) {
+  std::string out = r.assignment +
+                    (with_points ? ": " + fixed(r.score) + " / " + fixed(r.max_score) + " points"
+                                 : std::string()) +
+                    " (rayfarm render version " + std::to_string(kRenderVersion) + ")\n";
   if (!r.error.empty()) out += "grader error: " + r.error + "\n";
   return out;
 }
@@ -200,8 +203,11 @@ std::string gradescope(const GradeResult& r) {
     j["extra_data"] = extra;
     tests.push_back(j);
   }
+  // Gradescope shows the top-level output to students whatever the tests' visibility.
+  const bool all_visible = std::all_of(r.tests.begin(), r.tests.end(),
+                                       [](const TestResult& t) { return t.visibility == "visible"; });
   Json out = {{"score", score_number(r.error.empty() ? r.score : 0)},
-              {"output", header_text(r)},
+              {"output", header_text(r, all_visible)},
               {"output_format", "md"},
               {"tests", tests}};
   return text(out, 2) + "\n";

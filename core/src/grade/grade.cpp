@@ -220,14 +220,21 @@ GradeResult grade(const Assignment& assignment, Backend& backend, const GradeSet
     if (m->max_abs == 0) {
       r.message = "identical to the reference";
     } else {
-      r.message = std::to_string(m->differing_pixels) + " of " +
-                  std::to_string(static_cast<long long>(ref.width) * ref.height) +
+      const long long pixels = static_cast<long long>(ref.width) * ref.height;
+      // The limit as the student can weigh it: in pixels when the two percentages print
+      // alike (98.43% against up to 98.43%, and failed).
+      std::string limit = percent(t.max_bad_fraction);
+      if (limit == percent(m->differing_fraction))
+        limit = std::to_string(static_cast<long long>(
+                    std::floor(t.max_bad_fraction * static_cast<double>(pixels)))) +
+                " pixels";
+      r.message = std::to_string(m->differing_pixels) + " of " + std::to_string(pixels) +
                   " pixels differ by more than " + std::to_string(t.threshold) +
                   (t.threshold == 1 ? " level" : " levels") +
                   (t.neighborhood ? " (3x3 neighbourhood)" : "") + " (" +
                   percent(m->differing_fraction) +
                   (!all_or_nothing            ? ""
-                   : t.max_bad_fraction > 0 ? "; up to " + percent(t.max_bad_fraction) + " may"
+                   : t.max_bad_fraction > 0 ? "; up to " + limit + " may"
                                             : "; none may") +
                   "); mean difference " + num(m->mean_abs) + ", largest " +
                   std::to_string(m->max_abs);
@@ -266,6 +273,18 @@ nlohmann::json lock_json(const GradeResult& result) {
   return {{"assignment", result.assignment},
           {"render_version", kRenderVersion},
           {"tests", tests}};
+}
+
+std::string lock_mismatch(const GradeResult& result, const std::string& lock,
+                          const std::string& name, std::vector<std::string>* problems) {
+  const nlohmann::json doc = nlohmann::json::parse(lock, nullptr, false);
+  const std::vector<std::string> found =
+      doc.is_discarded() ? std::vector<std::string>{"the lock file is not JSON"}
+                         : check_lock(result, doc);
+  if (problems) *problems = found;
+  if (found.empty()) return "";
+  return "the references are not the ones in " + name + ": " + found.front() +
+         (found.size() > 1 ? " (and " + std::to_string(found.size() - 1) + " more)" : "");
 }
 
 std::vector<std::string> check_lock(const GradeResult& result, const nlohmann::json& lock) {
