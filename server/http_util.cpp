@@ -37,6 +37,18 @@ void send_image(Response& res, const Image& image, bool ppm) {
                   ppm ? "image/x-portable-pixmap" : "image/png");
 }
 
+std::string lower_ascii(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string_view trim(std::string_view s) {
+  const size_t a = s.find_first_not_of(" \t");
+  if (a == std::string_view::npos) return {};
+  return s.substr(a, s.find_last_not_of(" \t") - a + 1);
+}
+
 bool none_match_hits(const Request& req, std::string_view etag) {
   // Outside GET and HEAD a met condition is a 412 (RFC 9110 §13.1.2), never a 304: a POST
   // that waits for its image ignores it.

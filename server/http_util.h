@@ -28,6 +28,11 @@ void send_error(httplib::Response& res, int status, const std::string& code,
 void send_image(httplib::Response& res, const Image& image, bool ppm);
 // Whether a GET or HEAD request's If-None-Match names `etag` (RFC 9110 §13.1.2): a list of
 // tags, weak or strong (compared weakly), or "*" for any current representation.
+// ASCII letters in lower case (header values that are case-insensitive), and a value without
+// the spaces and tabs around it.
+std::string lower_ascii(std::string_view s);
+std::string_view trim(std::string_view s);
+
 bool none_match_hits(const httplib::Request& req, std::string_view etag);
 // Sends a finished job's result with its caching headers; false when it has expired.
 bool send_result(Service& service, const httplib::Request& req, httplib::Response& res,

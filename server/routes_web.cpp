@@ -1,11 +1,11 @@
 // The web page: GET / for browsers (curl and scripts still get the JSON index) and
 // GET /web/NAME for its scripts and styles, all built into the binary (web_files.h).
-#include <cctype>
-#include <cstdlib>
+#include <optional>
 #include <string>
 #include <string_view>
 
 #include "http_util.h"
+#include "rayfarm/model_parser.h"
 #include "routes.h"
 #include "web_files.h"
 
@@ -40,36 +40,27 @@ void send_web_file(const Request& req, Response& res, const WebFile& file) {
   res.set_content(file.body.data(), file.body.size(), std::string(file.content_type));
 }
 
+// The next item of a list separated by `sep`, trimmed; `rest` keeps what follows it.
+std::string_view next_item(std::string_view& rest, char sep) {
+  const std::size_t at = rest.find(sep);
+  const std::string_view item = rest.substr(0, at);
+  rest = at == std::string_view::npos ? std::string_view() : rest.substr(at + 1);
+  return trim(item);
+}
+
 }  // namespace
 
 bool wants_page(const Request& req) {
-  std::string accept = req.get_header_value("Accept");  // media types: any case
-  for (char& c : accept) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  auto trimmed = [](std::string_view s) {
-    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-    return s;
-  };
+  const std::string accept = lower_ascii(req.get_header_value("Accept"));  // any case
   // text/html among the media ranges, unless its weight is 0 ("not acceptable", RFC 9110).
-  std::string_view rest(accept);
-  while (!rest.empty()) {
-    const std::size_t comma = rest.find(',');
-    std::string_view range = rest.substr(0, comma);
-    rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
-    const std::size_t semi = range.find(';');
-    if (trimmed(range.substr(0, semi)) != "text/html") continue;
+  for (std::string_view ranges(accept); !ranges.empty();) {
+    std::string_view range = next_item(ranges, ',');
+    if (next_item(range, ';') != "text/html") continue;
     double q = 1;
-    for (std::string_view params = semi == std::string_view::npos ? "" : range.substr(semi + 1);
-         !params.empty();) {
-      const std::size_t next = params.find(';');
-      const std::string_view param = trimmed(params.substr(0, next));
-      params = next == std::string_view::npos ? std::string_view() : params.substr(next + 1);
-      if (param.starts_with("q=")) {
-        const std::string value(param.substr(2));
-        char* end = nullptr;
-        const double w = std::strtod(value.c_str(), &end);
-        if (end && *end == '\0' && !value.empty()) q = w;
-      }
+    while (!range.empty()) {
+      const std::string_view param = next_item(range, ';');
+      if (param.starts_with("q="))
+        if (const std::optional<double> w = parse_number(param.substr(2))) q = *w;
     }
     return q > 0;
   }

@@ -1097,9 +1097,12 @@ TEST(ReportCli, SettingsTheProfileRefusesAreLeftOutAndSaid) {
   const fs::path out =
       fs::temp_directory_path() / ("rayfarm-cli-report-cpsc-" + std::to_string(getpid()));
   const std::string scene = q(RAYFARM_SOURCE_DIR "/scenes/cho.txt");
-  const std::string quick = " -q --runs 1 --max-pixels 300 --reference-spp 4";
-  Outcome r = run(kRayfarm + " report " + scene + quick + " --profile cpsc102 --out " +
-                  q(out.string()) + " 2>&1 >/dev/null");
+  // A quick report with `extra` options into `folder`: its exit code and standard error.
+  const auto report = [&](const std::string& extra, const fs::path& folder) {
+    return run(kRayfarm + " report " + scene + " -q --runs 1 --max-pixels 300 --reference-spp 4" +
+               extra + " --out " + q(folder.string()) + " 2>&1 >/dev/null");
+  };
+  Outcome r = report(" --profile cpsc102", out);
   EXPECT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("rayfarm: note: spp sweep: left out where precision float is not "
                        "available in the cpsc102 profile"),
@@ -1124,8 +1127,7 @@ TEST(ReportCli, SettingsTheProfileRefusesAreLeftOutAndSaid) {
   EXPECT_NE(text.find("- Note: bailout sweep: left out"), std::string::npos) << text;
   fs::remove_all(out);
 
-  Outcome deep = run(kRayfarm + " report " + scene + quick + " --profile cpsc102 " +
-                     "--reference-depth 2000 --out " + q(out.string()) + " 2>&1");
+  Outcome deep = report(" --profile cpsc102 --reference-depth 2000", out);
   EXPECT_EQ(deep.code, 2) << deep.out;
   EXPECT_NE(deep.out.find("rayfarm: error: the reference cannot be rendered: the cpsc102 "
                           "profile follows rays at most 1000 bounces deep"),
@@ -1133,8 +1135,7 @@ TEST(ReportCli, SettingsTheProfileRefusesAreLeftOutAndSaid) {
       << deep.out;
   EXPECT_FALSE(fs::exists(out));
 
-  Outcome raised = run(kRayfarm + " report " + scene + quick + " --reference-depth 1 --out " +
-                       q(out.string()) + " 2>&1 >/dev/null");
+  Outcome raised = report(" --reference-depth 1", out);
   EXPECT_EQ(raised.code, 0) << raised.out;
   EXPECT_NE(raised.out.find("rayfarm: note: the reference's max_depth is 8, the renders' own, "
                             "not 1"),
@@ -1143,13 +1144,12 @@ TEST(ReportCli, SettingsTheProfileRefusesAreLeftOutAndSaid) {
   fs::remove_all(out);
 
   const fs::path orphan = out / "no" / "such" / "folder";
-  Outcome nowhere = run(kRayfarm + " report " + scene + quick + " --out " + q(orphan.string()) +
-                        " 2>&1 >/dev/null");
+  Outcome nowhere = report("", orphan);
   EXPECT_EQ(nowhere.code, 2) << nowhere.out;
   EXPECT_NE(nowhere.out.find("cannot write"), std::string::npos) << nowhere.out;
   EXPECT_FALSE(fs::exists(out));
   for (const char* flag : {" --precision float", " --bailout 0.2"}) {
-    Outcome refused = run(kRayfarm + " report " + scene + quick + flag + " 2>&1");
+    Outcome refused = report(flag, out);
     EXPECT_EQ(refused.code, 2) << flag << refused.out;
   }
 }
