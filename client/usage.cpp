@@ -1,6 +1,7 @@
 // The command line's own words: help footers, range checks that name the option and the
 // accepted range, and CLI11's parse errors rephrased ("--width given twice").
 #include <charconv>
+#include <filesystem>
 #include <optional>
 #include <string_view>
 #include <vector>
@@ -65,6 +66,15 @@ std::string specific(const CLI::App& app, const CLI::App* sub, const CLI::ParseE
       if (o->count() > 1 && o->get_expected_max() == 1)
         return (o->get_lnames().empty() ? o->get_name() : "--" + o->get_lnames().front()) +
                " given " + times(o->count()) + "; give it once";
+  if (sub && dynamic_cast<const CLI::RequiredError*>(&e)) {
+    // A file whose name starts with '-' is read as an option: say how to name it.
+    for (const std::string& arg : where.remaining()) {
+      std::error_code ec;
+      if (arg.size() > 1 && arg[0] == '-' && std::filesystem::exists(arg, ec))
+        return std::string(e.what()) + "; '" + arg + "' was read as an option: name the file ./" +
+               arg + ", or give it last, after --";
+    }
+  }
   if (!sub && dynamic_cast<const CLI::RequiredError*>(&e)) {
     std::string list;
     for (const CLI::App* s : app.get_subcommands({}))

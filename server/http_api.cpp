@@ -173,6 +173,9 @@ void HttpApi::harden() {
   server_.set_post_routing_handler([this](const Request& req, Response& res) {
     // The library offers byte ranges on HEAD answers; none are served (pre-routing, below).
     if (req.method == "HEAD") res.headers.erase("Accept-Ranges");
+    // It also says "Content-Length: 0" of every empty answer. A 204 must not say a length,
+    // and a 304 may only say the image's own (RFC 9110 §8.6): a cache would take 0 for it.
+    if (res.status == 204 || res.status == 304) res.headers.erase("Content-Length");
     const std::string& origin = service_.settings().cors_origin;
     if (origin.empty()) return;
     res.set_header("Vary", "Origin");
@@ -454,9 +457,14 @@ constexpr RouteInfo kRoutes[] = {
 
 std::string allowed_methods(const std::string& path) {
   std::string allow;
+  auto add = [&allow](const std::string& method) {
+    if (allow.find(method) == std::string::npos) allow += (allow.empty() ? "" : ", ") + method;
+  };
   for (const RouteInfo& r : kRoutes)
-    if (std::regex_match(path, std::regex(r.pattern)) && allow.find(r.method) == std::string::npos)
-      allow += (allow.empty() ? "" : ", ") + std::string(r.method);
+    if (std::regex_match(path, std::regex(r.pattern))) {
+      add(r.method);
+      if (std::string_view(r.method) == "GET") add("HEAD");  // the library answers HEAD as GET
+    }
   return allow;
 }
 

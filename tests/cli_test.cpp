@@ -749,6 +749,24 @@ TEST(UsageCli, ErrorsNameTheOptionAndWhatItTakes) {
   usage("trace " + scene + " 1 4294967296",
         "y: '4294967296' is past every image: images are at most 65535 pixels wide or high");
   usage("convert " + scene + " --to json --camera nosuch", "error: no camera named 'nosuch'");
+  {
+    // A file whose name starts with '-' reads as an option: how to name it is said, and
+    // both ways work.
+    TempDir dir("dash-name");
+    fs::copy_file(RAYFARM_SOURCE_DIR "/scenes/minimal.txt", dir.path / "-scene.txt");
+    const std::string in = "cd " + q(dir.path.string()) + " && " + kRayfarm;
+    Outcome r = run(in + " check -scene.txt 2>&1");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_EQ(r.out.rfind("rayfarm: scenes is required; '-scene.txt' was read as an option: "
+                          "name the file ./-scene.txt, or give it last, after --\n", 0), 0u)
+        << r.out;
+    EXPECT_EQ(run(in + " check ./-scene.txt").code, 0);
+    EXPECT_EQ(run(in + " render -q -o out.png -- -scene.txt").code, 0);
+    EXPECT_TRUE(is_png(dir.path / "out.png"));
+    // Not a file: nothing is suggested.
+    Outcome none = run(in + " check -nothing.txt 2>&1");
+    EXPECT_EQ(none.out.find("./-nothing.txt"), std::string::npos) << none.out;
+  }
   // An image too large for render is refused by trace too, as render says it (with the
   // place in the file where the file gives the size).
   for (const std::string& command : {std::string(" render "), std::string(" trace ")}) {

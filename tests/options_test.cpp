@@ -168,6 +168,21 @@ TEST(Options, AProfilesDefaultsGivenExplicitlyShareItsCacheKey) {
   EXPECT_NE(canonical_string({}).find("max_dist=unlimited;"), std::string::npos);
 }
 
+// A number option given as -0 is the render of 0: one cache key and one ETag, not two.
+TEST(Options, MinusZeroIsZero) {
+  for (const OptionSpec& spec : option_specs()) {
+    if (spec.name == std::string_view("camera")) continue;  // a name: "-0" is another camera
+    RenderOptions minus;
+    if (apply_option(minus, spec.name, "-0")) continue;  // not a number option, or 0 refused
+    RenderOptions zero = with({}, spec.name, "0");
+    EXPECT_EQ(canonical_string(minus), canonical_string(zero)) << spec.name;
+    EXPECT_EQ(printed(spec, minus), printed(spec, zero)) << spec.name;
+  }
+  EXPECT_EQ(canonical_string(with({}, "background", "-0,0,-0.0")),
+            canonical_string(with({}, "background", "0")));
+  EXPECT_EQ(canonical_string(with({}, "bailout", "-0")), canonical_string({}));
+}
+
 // Colours are 0..1: 255 is the usual slip, refused rather than clamped to white.
 TEST(Options, ABackgroundAboveOneIsRefusedWithAHint) {
   RenderOptions o;

@@ -755,6 +755,9 @@ TEST(ServerJobs, DoneImageIsPngOrPpmAndRevalidates) {
   ASSERT_TRUE(again);
   EXPECT_EQ(again->status, 304);
   EXPECT_TRUE(again->body.empty());
+  // No "Content-Length: 0": a 304 may only give the image's own length (RFC 9110 §8.6).
+  EXPECT_FALSE(again->has_header("Content-Length"));
+  EXPECT_EQ(again->get_header_value("ETag"), etag);
   // RFC 9110's other forms: a list, a weak tag, any representation; another tag is no match.
   for (const std::string& header : {"\"other\", " + etag, "W/" + etag, std::string("*")}) {
     auto listed = c->Get("/jobs/" + id + "/image", {{"If-None-Match", header}});
@@ -1575,7 +1578,7 @@ TEST(ServerRoutes, AKnownPathWithAnotherMethodIs405WithAllow) {
   auto put_job = c->Put("/jobs/0123456789abcdef0123456789abcdef", "", "text/plain");
   ASSERT_TRUE(put_job);
   EXPECT_EQ(put_job->status, 405);
-  EXPECT_EQ(put_job->get_header_value("Allow"), "GET, DELETE");
+  EXPECT_EQ(put_job->get_header_value("Allow"), "GET, HEAD, DELETE");  // HEAD is GET's
   auto nothing = c->Get("/nothing");
   ASSERT_TRUE(nothing);
   EXPECT_EQ(nothing->status, 404);
@@ -2658,7 +2661,7 @@ TEST(ServerWeb, EveryFileThePageNamesIsServedWithItsTypeAndRevalidates) {
   auto post = c->Post("/web/main.js", "", "text/plain");
   ASSERT_TRUE(post);
   EXPECT_EQ(post->status, 405);
-  EXPECT_EQ(post->get_header_value("Allow"), "GET");
+  EXPECT_EQ(post->get_header_value("Allow"), "GET, HEAD");
 }
 
 TEST(ServerWeb, ThePageLoadsWithoutATokenAndTheApiStillNeedsOne) {
@@ -2705,6 +2708,7 @@ TEST(ServerCors, OnlyTheConfiguredOriginMayCallTheApiWithItsToken) {
                                        {"Access-Control-Request-Headers", "authorization,content-type"}});
   ASSERT_TRUE(pre);
   EXPECT_EQ(pre->status, 204);
+  EXPECT_FALSE(pre->has_header("Content-Length"));  // a 204 says no length (RFC 9110 §8.6)
   EXPECT_EQ(pre->get_header_value("Access-Control-Allow-Origin"), origin);
   EXPECT_EQ(pre->get_header_value("Access-Control-Allow-Methods"), "POST");
   EXPECT_EQ(pre->get_header_value("Access-Control-Allow-Headers"),
@@ -2713,7 +2717,7 @@ TEST(ServerCors, OnlyTheConfiguredOriginMayCallTheApiWithItsToken) {
                                {{"Origin", origin}, {"Access-Control-Request-Method", "DELETE"}});
   ASSERT_TRUE(job_pre);
   EXPECT_EQ(job_pre->status, 204);
-  EXPECT_EQ(job_pre->get_header_value("Access-Control-Allow-Methods"), "GET, DELETE");
+  EXPECT_EQ(job_pre->get_header_value("Access-Control-Allow-Methods"), "GET, HEAD, DELETE");
   for (const char* other : {"https://evil.example.com", "https://grader.example.edu:444",
                             "http://grader.example.edu"}) {
     auto bad = none->Options("/render", {{"Origin", other}, {"Access-Control-Request-Method", "POST"}});

@@ -77,7 +77,7 @@ std::optional<std::string> number_at_least(std::string_view v, double lo, bool s
   if (strict ? !(*n > lo) : !(*n >= lo))
     return std::string("must be ") + (strict ? "> " : ">= ") + format_number(lo) + ", got " +
            shown(v);
-  out = *n;
+  out = *n + 0.0;  // -0 is 0: the same render, so the same cache key and ETag
   return std::nullopt;
 }
 

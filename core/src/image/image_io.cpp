@@ -184,9 +184,9 @@ std::optional<Image> decode_ppm(std::string_view s, std::string* error, long lon
   }
   std::vector<std::uint8_t> to_8bit(maxval + 1);
   for (std::uint64_t v = 0; v <= maxval; ++v) to_8bit[v] = (v * 255 + maxval / 2) / maxval;
-  auto too_big = [&](std::uint64_t v) {
-    return fail(error,
-                "PPM sample " + std::to_string(v) + " exceeds maxval " + std::to_string(maxval));
+  // The sample as written: a value past 2^32 is read saturated.
+  auto too_big = [&](const std::string& sample) {
+    return fail(error, "PPM sample " + sample + " exceeds maxval " + std::to_string(maxval));
   };
 
   std::uint64_t samples = width * height * 3;
@@ -206,7 +206,10 @@ std::optional<Image> decode_ppm(std::string_view s, std::string* error, long lon
         return fail(error, "bad PPM data: sample " + std::to_string(image.rgb.size() + 1) + ", " +
                                shown(number.text) + ", is not a whole number");
       }
-      if (number.value > maxval) return too_big(number.value);
+      if (number.value > maxval) {
+        const std::string text(number.text.substr(0, 20));
+        return too_big(number.text.size() > 20 ? text + "..." : text);
+      }
       image.rgb.push_back(to_8bit[number.value]);
     }
     return image;
@@ -227,7 +230,7 @@ std::optional<Image> decode_ppm(std::string_view s, std::string* error, long lon
   const auto* data = reinterpret_cast<const unsigned char*>(s.data() + pos);
   for (std::uint64_t i = 0; i < samples; ++i) {
     std::uint64_t v = sample_bytes == 2 ? (data[2 * i] << 8 | data[2 * i + 1]) : data[i];
-    if (v > maxval) return too_big(v);
+    if (v > maxval) return too_big(std::to_string(v));
     image.rgb[i] = to_8bit[v];
   }
   return image;
