@@ -49,6 +49,18 @@ std::string_view trim(std::string_view s) {
   return s.substr(a, s.find_last_not_of(" \t") - a + 1);
 }
 
+std::string origin_form(std::string_view target) {
+  for (std::string_view scheme : {"http://", "https://"}) {
+    if (target.size() < scheme.size() || lower_ascii(target.substr(0, scheme.size())) != scheme)
+      continue;
+    const std::string_view rest = target.substr(scheme.size());
+    const size_t end = rest.find_first_of("/?#");  // where the authority ends
+    if (end == std::string_view::npos) return "/";
+    return (rest[end] == '/' ? "" : "/") + std::string(rest.substr(end));
+  }
+  return std::string(target);
+}
+
 bool none_match_hits(const Request& req, std::string_view etag) {
   // Outside GET and HEAD a met condition is a 412 (RFC 9110 §13.1.2), never a 304: a POST
   // that waits for its image ignores it.

@@ -26,13 +26,16 @@ void send_error(httplib::Response& res, const ApiError& e);
 void send_error(httplib::Response& res, int status, const std::string& code,
                 const std::string& message);
 void send_image(httplib::Response& res, const Image& image, bool ppm);
-// Whether a GET or HEAD request's If-None-Match names `etag` (RFC 9110 §13.1.2): a list of
-// tags, weak or strong (compared weakly), or "*" for any current representation.
 // ASCII letters in lower case (header values that are case-insensitive), and a value without
 // the spaces and tabs around it.
 std::string lower_ascii(std::string_view s);
 std::string_view trim(std::string_view s);
+// A request target in absolute form ("http://host:8080/jobs?x=1", which a server must accept:
+// RFC 9112 §3.2.2) as the origin form the routes match ("/jobs?x=1"); any other unchanged.
+std::string origin_form(std::string_view target);
 
+// Whether a GET or HEAD request's If-None-Match names `etag` (RFC 9110 §13.1.2): a list of
+// tags, weak or strong (compared weakly), or "*" for any current representation.
 bool none_match_hits(const httplib::Request& req, std::string_view etag);
 // Sends a finished job's result with its caching headers; false when it has expired.
 bool send_result(Service& service, const httplib::Request& req, httplib::Response& res,

@@ -2883,6 +2883,40 @@ TEST(ServerHardening, ChunkedBodyIsRefusedWithoutReadingIt) {
   EXPECT_EQ(code_of(server.client()->Get("/healthz")), 200);
 }
 
+// A request target in absolute form (what a client sends through a proxy) is routed by its
+// path, as a server must (RFC 9112 §3.2.2); its query is kept.
+TEST(ServerHardening, AnAbsoluteFormTargetIsRoutedByItsPath) {
+  TestServer server;
+  auto ask = [&](const std::string& line, const std::string& body = "") {
+    RawConnection conn(server.port());
+    const std::string length = body.empty() ? "" : "Content-Length: " +
+                                                       std::to_string(body.size()) + "\r\n";
+    EXPECT_TRUE(conn.send(line + "\r\nHost: 127.0.0.1\r\n" + length + "\r\n" + body));
+    return conn.read_response();
+  };
+  auto health = ask("GET http://127.0.0.1:" + std::to_string(server.port()) + "/healthz HTTP/1.1");
+  ASSERT_TRUE(health);
+  EXPECT_EQ(health->status, 200);
+  auto upper = ask("GET HTTPS://other.example/healthz HTTP/1.1");
+  ASSERT_TRUE(upper);
+  EXPECT_EQ(upper->status, 200);
+  auto index = ask("GET http://127.0.0.1 HTTP/1.1");  // no path: the root
+  ASSERT_TRUE(index);
+  EXPECT_EQ(index->status, 200);
+  EXPECT_NE(index->body.find("\"routes\""), std::string::npos);
+  auto rendered = ask("POST http://x/render?wait=1&spp=2 HTTP/1.1", kScene);
+  ASSERT_TRUE(rendered);
+  EXPECT_EQ(rendered->status, 200);
+  EXPECT_EQ(rendered->body, local_render(kScene, {{"spp", "2"}}));
+  auto typo = ask("GET http://x/healthz?sp=2 HTTP/1.1");
+  ASSERT_TRUE(typo);
+  EXPECT_EQ(typo->status, 400);
+  // Only a scheme and authority go: a path naming a URL inside it is still that path.
+  auto inside = ask("GET /web/http://x/healthz HTTP/1.1");
+  ASSERT_TRUE(inside);
+  EXPECT_EQ(inside->status, 404);
+}
+
 // Bodies the library would not read are never read as the next request: two lengths, a
 // length that is not digits, a body on a GET, a header name with a space in it ("Content-
 // Length : 5"). Each is a 400 and the end of the connection, with nothing else answered.
