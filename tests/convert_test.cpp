@@ -214,6 +214,24 @@ TEST(Convert, KeepsEveryNumberBitForBit) {
   }
 }
 
+// Each number in the fewest digits that read back as it (fixed from 1e-6 to 1e15), and a
+// double stays a double ("-0.0").
+TEST(Convert, WritesJsonNumbersInTheFewestDigits) {
+  const std::pair<double, std::string> cases[] = {
+      {1e23, "1e+23"},       {8.41e21, "8.41e+21"},  {0.0008, "0.0008"},   {1e-7, "1e-07"},
+      {-0.0, "-0.0"},        {0.1, "0.1"},           {-2.5e-7, "-2.5e-07"}, {0.000008, "0.000008"},
+      {1.0 / 3.0, "0.3333333333333333"}, {1e16, "1e+16"}, {2.5, "2.5"},   {1e300, "1e+300"}};
+  for (const auto& [v, expected] : cases) {
+    SCOPED_TRACE(expected);
+    const std::string text = "plane p { material m normal 0 1 0 point " + format_number(v) +
+                             " 7 7 }\nmaterial m { ambient 1 }\n";
+    const std::string json = write_json(model_desc(text));
+    EXPECT_NE(json.find("\n        " + expected + ",\n"), std::string::npos) << json;
+    const SceneDesc back = json_desc(json);
+    EXPECT_TRUE(same_bits(back.entities[0].attrs[2].numbers[0], v));
+  }
+}
+
 TEST(Convert, KeepsAOneNumberColourAsOneNumber) {
   SceneDesc original = model_desc("material m { ambient 2 diffuse 0.5 0.25 0 }\n");
   std::string json = write_json(original);

@@ -178,9 +178,10 @@ TEST(Triangle, VerticesAreProjectedAlongTheNormalIntoItsPlane) {
     triangle { material m normal 0 0 1 point 0 0 -5 vertex1 1 -3 -1 vertex2 1 5 -9 vertex3 4 1 -5 })")));
 }
 
-// Whether three points make a triangle does not depend on the scale they are written at.
+// Whether three points make a triangle does not depend on the scale they are written at
+// (up to the ±1e150 of every position: past it a vertex is refused, ModelParser's tests).
 TEST(Triangle, HasAnAreaAtAnyScale) {
-  for (const char* scale : {"1e-100", "1e-10", "1", "1e100", "1e154", "1e300"}) {
+  for (const char* scale : {"1e-100", "1e-10", "1", "1e100", "1e150"}) {
     SCOPED_TRACE(scale);
     const std::string s(scale);
     const std::string text = kCamera + "material m { ambient 1 }\n"

@@ -203,6 +203,35 @@ TEST(JsonScene, ReportsAnUnknownTopLevelKey) {
   EXPECT_TRUE(is_diag(d, "unknown-key", "/light", "did you mean \"lights\"?"));
 }
 
+// A misspelt "camera" or "materials", or a camera or material that is not an object, is one
+// error, as a misspelt keyword is in a model file: not also "no camera" or "undefined
+// material" for what it held.
+TEST(JsonScene, AMisspeltOrMistypedCameraOrMaterialsIsOneError) {
+  const std::string camera = R"({"pixeldim": [4, 3], "worlddim": [8, 6], "viewpoint": [4, 3, 5]})";
+  const std::string objects =
+      R"("objects": [{"type": "sphere", "material": "m", "center": [4, 3, -4], "radius": 1}])";
+  const std::string materials = R"({"m": {"ambient": 1}})";
+  struct Case {
+    std::string text, code, path, message;
+  };
+  const Case cases[] = {
+      {"{\"camra\": " + camera + ", \"materials\": " + materials + ", " + objects + "}",
+       "unknown-key", "/camra", "did you mean \"camera\"?"},
+      {"{\"cameras\": {\"a\": []}, \"materials\": " + materials + ", " + objects + "}",
+       "json-type", "/cameras/a", "expected an object, got an array"},
+      {"{\"camera\": [], \"materials\": " + materials + ", " + objects + "}", "json-type",
+       "/camera", "expected an object, got an array"},
+      {"{\"camera\": " + camera + ", \"materals\": " + materials + ", " + objects + "}",
+       "unknown-key", "/materals", "did you mean \"materials\"?"},
+      {"{\"camera\": " + camera + ", \"materials\": {\"m\": 5}, " + objects + "}",
+       "json-type", "/materials/m", "expected an object, got a number"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.text);
+    EXPECT_TRUE(is_diag(single_error(c.text), c.code, c.path, c.message));
+  }
+}
+
 TEST(JsonScene, ReportsAValueOfTheWrongType) {
   Diagnostic d =
       single_error(scene_with_sphere(R"("material": "m", "center": [0, 0, -5], "radius": "1")"));

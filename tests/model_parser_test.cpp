@@ -438,6 +438,12 @@ TEST(ModelParser, ReportsOutOfRangeValuesAtTheValue) {
        "double), got 1e+155"},
       {"sphere s { material m center -2e150 0 -5 radius 1 }", "-2e150",
        "'center' coordinates must be within ±1e150"},
+      // A triangle's vertices too: past that it vanished without a word (or, at 1e308, was
+      // called a line).
+      {"triangle t { material m vertex1 -10 -10 -1 vertex2 1e156 -10 -1 vertex3 0 1 -1 }",
+       "1e156", "'vertex2' coordinates must be within ±1e150"},
+      {"tri t { material m v0 -1e308 0 -5 v1 1 0 -5 v2 0 1 -5 }", "-1e308",
+       "'v0' coordinates must be within ±1e150"},
   };
   for (const OutOfRange& c : cases) {
     SCOPED_TRACE(c.line);
@@ -748,6 +754,19 @@ TEST(ModelParser, ReportsANestedBlock) {
   std::string line = "sphere s { material m { x } center 0 0 -5 radius 1 }";
   Diagnostic d = single_error(line + "\n");
   EXPECT_TRUE(is_diag(d, "syntax", 3, column_of(line, "{ x"), "unexpected '{' inside sphere 's'"));
+}
+
+// A stray '{' before the entity's own attributes is one error: they are still read as its
+// own (they were reported missing, and its '}' as never closed).
+TEST(ModelParser, ReportsAStrayBraceBeforeAttributesOnce) {
+  for (const auto& [line, stray] :
+       {std::pair<std::string, std::string>{"sphere s { material m { center 0 0 -5 radius 1 }",
+                                            "{ center"},
+        {"sphere s { material m center 0 0 -5 { radius 1 }", "{ radius"}}) {
+    SCOPED_TRACE(line);
+    Diagnostic d = single_error(line + "\n");
+    EXPECT_TRUE(is_diag(d, "syntax", 3, column_of(line, stray), "unexpected '{' inside sphere 's'"));
+  }
 }
 
 // --- Whole files ----------------------------------------------------------------------------

@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "hand_computed.h"
+#include "rayfarm/lint.h"
 #include "render/cpsc102/glibc_random.h"
 
 namespace rayfarm {
@@ -499,6 +500,35 @@ TEST(Cpsc102, ConeNormalHasItsAxialPartDoubled) {
   EXPECT_EQ(centre(img, 0), trunc_byte(8.1L / 18));
   EXPECT_EQ(centre(img, 1), trunc_byte(81 * 0.6L / 18 / 18));  // the true normal: 53
   EXPECT_EQ(centre(img, 2), trunc_byte(81 * 0.8L / 10 / 18));  // the true normal: 63
+}
+
+// A triangle whose plane the course's program cannot compute (the square of its edges' cross
+// product overflows, and the unit normal comes out 0) is not drawn in this profile, as the
+// program drew none: the lint says so at the triangle. The lecture profile draws it.
+TEST(Cpsc102, ATriangleTooLargeForTheProgramsArithmeticIsNotDrawnAndSaidSo) {
+  auto scene = [](const std::string& far) {
+    return scene_from(kCamera + "material m { ambient 1 }\ntriangle t { material m vertex1 -10 "
+                      "-10 -1 vertex2 " + far + " -10 -1 vertex3 -10 " + far + " -1 }\n");
+  };
+  auto lints = [](const Scene& s, const RenderOptions& o) {
+    Diagnostics d;
+    lint_scene(s, o, d);
+    std::vector<Diagnostic> lost;
+    for (const Diagnostic& x : d.items())
+      if (x.code == "course-triangle-lost") lost.push_back(x);
+    return lost;
+  };
+  const Scene near = scene("1e76"), far = scene("1e78");
+  EXPECT_GT(centre(render(near, course()), 0), 0);
+  EXPECT_EQ(centre(render(far, course()), 0), 0);
+  EXPECT_GT(centre(render(far), 0), 0);
+  EXPECT_TRUE(lints(near, course()).empty());
+  EXPECT_TRUE(lints(far, {}).empty());
+  const std::vector<Diagnostic> lost = lints(far, course());
+  ASSERT_EQ(lost.size(), 1u);
+  EXPECT_EQ(lost[0].where.line, 3);
+  EXPECT_EQ(lost[0].message.rfind("triangle 't': the course's program cannot find its plane", 0),
+            0u);
 }
 
 // ---------------------------------------------------------------------------------------

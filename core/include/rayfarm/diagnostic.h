@@ -71,7 +71,9 @@ std::string format_diagnostics(const Diagnostics& ds, std::string_view file_name
 Where position_of_offset(std::string_view text, size_t offset);
 
 // The candidate closest to `word` by edit distance, or empty when none is close enough
-// to be a plausible typo.
+// to be a plausible typo. Empty too past kMaxHintCandidates candidates: a file of many
+// names, each referenced wrongly, must not cost a time quadratic in its size.
+inline constexpr size_t kMaxHintCandidates = 1000;
 std::string nearest_word(std::string_view word, std::span<const std::string_view> candidates);
 
 }  // namespace rayfarm

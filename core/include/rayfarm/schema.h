@@ -62,6 +62,11 @@ struct EntitySpec {
 };
 
 const EntitySpec& entity_spec(EntityKind kind);
+// An entity whose body could not be read, or one that stands in for a misspelt keyword or
+// key: every attribute counts as written-but-bad, so the scene builder reports none of them
+// missing, and its kind and name still count (no "no camera" or "undefined material" besides
+// the one error).
+void mark_all_invalid(EntityDesc& e);
 const EntitySpec* find_entity(std::string_view keyword);
 const AttrSpec* find_attr(const EntitySpec& entity, std::string_view key);
 std::span<const std::string_view> entity_keywords();

@@ -151,10 +151,7 @@ class CourseLinter {
     void add(std::string_view name) {
       if (!set.insert(name, 0)) list.push_back(name);
     }
-    std::string hint(std::string_view name) const {
-      constexpr size_t kMaxCandidates = 1000;  // a hint is not worth a quadratic time
-      return list.size() <= kMaxCandidates ? nearest_word(name, list) : std::string();
-    }
+    std::string hint(std::string_view name) const { return nearest_word(name, list); }
   };
   Names materials_;
   Names textures_;

@@ -10,6 +10,7 @@
 #include "rayfarm/options.h"
 #include "rayfarm/render.h"
 #include "rayfarm/schema.h"
+#include "render/cpsc102/x87.h"
 
 namespace rayfarm {
 namespace {
@@ -125,6 +126,31 @@ void lint_float_range(const Scene& scene, const Camera& cam, const RenderOptions
                   cam.where);
 }
 
+// The course's program finds the plane of a triangle without one (and of a tri) as the unit
+// of (v1 - v0) x (v2 - v1) in its own arithmetic: where the cross product's square overflows
+// or vanishes (edges past about 1e77, or under about 1e-77) that is not a number, and the
+// triangle is never drawn. The profile renders what the program did; this says so.
+void lint_reference_triangles(const Scene& scene, const RenderOptions& options,
+                              Diagnostics& diags) {
+  if (options.profile != Profile::cpsc102) return;
+  using cpsc102::V3;
+  for (const Object& o : scene.objects) {
+    const Triangle* t = o.as<Triangle>();
+    if (!t || t->plane) continue;
+    auto v3 = [](const glm::dvec3& v) { return V3{v.x, v.y, v.z}; };
+    const V3 a = v3(t->vertex[0]), b = v3(t->vertex[1]), c = v3(t->vertex[2]);
+    const V3 n = cpsc102::unit(cpsc102::cross(cpsc102::sub(b, a), cpsc102::sub(c, b)));
+    // Past the overflow the unit is 0 (times 1 / inf), past the underflow not a number.
+    if (cpsc102::dot(n, n) > 0.5) continue;
+    diags.warning("course-triangle-lost",
+                  label(entity_spec(o.kind).keyword, o.name) +
+                      ": the course's program cannot find its plane (the cross product of its "
+                      "edges overflows or vanishes in its arithmetic), so the cpsc102 profile "
+                      "draws nothing for it; scale the scene nearer to 1",
+                  o.where);
+  }
+}
+
 void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& diags,
                 bool every_camera) {
   auto cam_index = scene.find_camera(options.camera);
@@ -136,6 +162,7 @@ void lint_scene(const Scene& scene, const RenderOptions& options, Diagnostics& d
   lint_size(scene, cam, options, diags);
   if (every_camera) lint_other_cameras(scene, options, diags);
   lint_float_range(scene, cam, options, diags);
+  lint_reference_triangles(scene, options, diags);
   glm::dvec3 eye = cam.viewpoint;
   glm::dvec3 centre{cam.world_width / 2, cam.world_height / 2, 0};
   glm::dvec3 view = centre - eye;

@@ -200,7 +200,7 @@ Where position_of_offset(std::string_view text, size_t offset) {
 }
 
 std::string nearest_word(std::string_view word, std::span<const std::string_view> candidates) {
-  if (word.size() > 64) return {};
+  if (word.size() > 64 || candidates.size() > kMaxHintCandidates) return {};
   std::string lower(word);
   std::transform(lower.begin(), lower.end(), lower.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });

@@ -103,7 +103,7 @@ class JsonSceneReader {
       } else {
         static constexpr std::string_view kKeys[] = {"camera",  "cameras", "materials", "textures",
                                                      "lights",  "objects", "render"};
-        unknown_key(key, kKeys, path);
+        stand_in(unknown_key(key, kKeys, path), value, path, scene);
       }
     }
     return scene;
@@ -115,6 +115,31 @@ class JsonSceneReader {
       diags_.error("json-type", "expected " + std::string(what) + ", got " + type_name(value),
                    at(path));
     return ok;
+  }
+
+  // A misspelt "camera", "cameras", "materials" or "textures" (the key it probably meant is
+  // `meant`) is one error: stand-ins of that kind, with the names under it, keep "no camera"
+  // and "undefined material" from following it, as a misspelt keyword's in a model file.
+  void stand_in(const std::string& meant, const Json& value, const std::string& path,
+                SceneDesc& scene) {
+    if (meant == "camera") return add_stand_in(EntityKind::camera, "", path, scene);
+    const EntityKind kind = meant == "cameras"     ? EntityKind::camera
+                            : meant == "materials" ? EntityKind::material
+                            : meant == "textures"  ? EntityKind::texture
+                                                   : EntityKind::sphere;
+    if (kind == EntityKind::sphere) return;
+    if (!value.is_object()) return add_stand_in(kind, "", path, scene);
+    for (auto& [name, entry] : value.items()) add_stand_in(kind, name, child(path, name), scene);
+  }
+
+  void add_stand_in(EntityKind kind, const std::string& name, const std::string& path,
+                    SceneDesc& scene) {
+    EntityDesc e;
+    e.kind = kind;
+    e.name = is_valid_name(name) ? name : std::string();
+    e.where = e.name_where = at(path);
+    mark_all_invalid(e);
+    scene.entities.push_back(std::move(e));
   }
 
   // Reports an unknown key; returns the key it probably meant, if any.
@@ -168,7 +193,13 @@ class JsonSceneReader {
   void read_entity(EntityKind kind, std::optional<std::string> name, const Json& value,
                    const std::string& path, SceneDesc& scene) {
     const EntitySpec& spec = entity_spec(kind);
-    if (!expect(value.is_object(), value, "an object", path)) return;
+    if (!expect(value.is_object(), value, "an object", path)) {
+      // A camera, material or texture of the wrong type still counts as one (the one error).
+      if (kind == EntityKind::camera || kind == EntityKind::material ||
+          kind == EntityKind::texture)
+        add_stand_in(kind, name.value_or(""), path, scene);
+      return;
+    }
     EntityDesc e;
     e.kind = kind;
     e.where = at(path);

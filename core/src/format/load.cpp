@@ -35,6 +35,11 @@ std::string not_a_scene(std::string_view text) {
     return "this is a PPM image, not a scene";
   if (text.starts_with("PK\x03\x04")) return "this is a zip archive, not a scene";
   if (text.starts_with("\x1F\x8B")) return "this is gzip-compressed, not a scene";
+  // UTF-16, as some editors save text: with its byte-order mark, or an ASCII character and a
+  // NUL byte (no scene holds a NUL).
+  if (text.starts_with("\xFF\xFE") || text.starts_with("\xFE\xFF") ||
+      (text.size() >= 2 && (text[0] == '\0') != (text[1] == '\0')))
+    return "this is UTF-16 text (save the scene as UTF-8)";
   return "";
 }
 

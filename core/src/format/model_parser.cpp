@@ -66,11 +66,6 @@ Unseen unseen(std::string_view word) {
   return u;
 }
 
-// An entity whose body could not be read: every attribute counts as written-but-bad, so the
-// scene builder reports none of them missing.
-void mark_all_invalid(EntityDesc& e) {
-  for (const AttrSpec& a : entity_spec(e.kind).attrs) e.invalid_keys.emplace_back(a.key);
-}
 
 class ModelParser {
  public:
@@ -224,7 +219,14 @@ class ModelParser {
       }
       if (t.kind == Token::open) {
         diags_.error("syntax", "unexpected '{' inside " + describe_entity(e), at(t));
-        skip_block();
+        // A stray brace before this entity's own attributes ("material m { center ...") is
+        // the typo: the attributes after it are still this entity's, and its '}' still its
+        // end. Anything else is a block of its own, skipped whole.
+        const Token& after = lex_.peek(1);
+        if (after.kind == Token::word && find_attr(spec, after.text))
+          lex_.next();
+        else
+          skip_block();
         continue;
       }
       if (const AttrSpec* attr = find_attr(spec, t.text)) {

@@ -210,6 +210,10 @@ Where AttrDesc::value_at(size_t i) const {
   }
 }
 
+void mark_all_invalid(EntityDesc& e) {
+  for (const AttrSpec& a : entity_spec(e.kind).attrs) e.invalid_keys.emplace_back(a.key);
+}
+
 const AttrDesc* EntityDesc::find(std::string_view key) const {
   for (const AttrDesc& a : attrs)
     if (a.key == key) return &a;

@@ -1,5 +1,7 @@
 // SceneDesc to the JSON scene format (docs/json-format.md).
+#include <algorithm>
 #include <charconv>
+#include <string>
 #include <cmath>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -19,6 +21,51 @@ Json number(double v) {
   if (v == std::floor(v) && std::fabs(v) < 9e15 && !(v == 0 && std::signbit(v)))
     return static_cast<long long>(v);
   return v;
+}
+
+// The fewest digits that read back as `v` (finite): fixed from 1e-6 to 1e15 ("0.0008"),
+// otherwise with an exponent ("1e-07", "1e+23"); always with a '.' or an exponent, so that it
+// reads back as a double ("-0.0", not the integer "-0").
+std::string json_double(double v) {
+  char sci[64], fixed[400];
+  const auto s = std::to_chars(sci, sci + sizeof sci, v, std::chars_format::scientific);
+  const std::string_view text(sci, static_cast<size_t>(s.ptr - sci));
+  const size_t e = text.find('e');
+  const int exponent = std::stoi(std::string(text.substr(e + 1)));
+  const auto digits = std::count_if(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(e),
+                                    [](char c) { return c >= '0' && c <= '9'; });
+  if (exponent < -6 || exponent >= 15) return std::string(text);
+  const int decimals = std::max(1, static_cast<int>(digits) - 1 - exponent);
+  const auto f = std::to_chars(fixed, fixed + sizeof fixed, v, std::chars_format::fixed, decimals);
+  return std::string(fixed, f.ptr);
+}
+
+// As nlohmann's dump(2) lays JSON out, but a double in the shortest text that reads back as
+// it (format_number, as the model writer's): the library's Grisu2 is not always shortest
+// (1e23 came out 9.999999999999999e+22).
+void write_pretty(const Json& j, int indent, std::string& out) {
+  const std::string pad(static_cast<size_t>(indent) + 2, ' ');
+  if (j.is_object() && !j.empty()) {
+    out += "{\n";
+    bool first = true;
+    for (auto& [key, value] : j.items()) {
+      out += (first ? "" : ",\n") + pad + Json(key).dump() + ": ";
+      write_pretty(value, indent + 2, out);
+      first = false;
+    }
+    out += "\n" + std::string(static_cast<size_t>(indent), ' ') + "}";
+  } else if (j.is_array() && !j.empty()) {
+    out += "[\n";
+    for (size_t i = 0; i < j.size(); ++i) {
+      out += (i ? ",\n" : "") + pad;
+      write_pretty(j[i], indent + 2, out);
+    }
+    out += "\n" + std::string(static_cast<size_t>(indent), ' ') + "]";
+  } else if (j.is_number_float()) {
+    out += json_double(j.get<double>());
+  } else {
+    out += j.dump();
+  }
 }
 
 Json attr_value(const AttrSpec& spec, const AttrDesc& a) {
@@ -136,7 +183,9 @@ std::string write_json(const SceneDesc& desc, bool with_render) {
     for (const OptionValue& v : desc.render) r[v.name] = option_value(v.name, v.value);
     root["render"] = r;
   }
-  return root.dump(2) + "\n";
+  std::string out;
+  write_pretty(root, 0, out);
+  return out + "\n";
 }
 
 }  // namespace rayfarm

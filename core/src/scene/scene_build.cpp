@@ -21,13 +21,16 @@ std::string position_text(const Where& w) {
 // "did you mean" and the list of defined names, for a reference to an undefined one.
 std::string undefined_message(const std::string& what, const std::string& name,
                               const std::string& in, const std::map<std::string, Where>& defined) {
+  // Each of many such references must not walk every name (nearest_word takes a bounded
+  // number of candidates).
   std::vector<std::string_view> names;
   std::string list;
-  for (auto& [n, where] : defined) {
-    names.push_back(n);
-    if (names.size() <= 12) list += (list.empty() ? "" : ", ") + n;
-  }
-  if (names.size() > 12) list += ", ...";
+  int listed = 0;
+  for (auto it = defined.begin(); it != defined.end() && listed < 12; ++it, ++listed)
+    list += (list.empty() ? "" : ", ") + it->first;
+  if (defined.size() > 12) list += ", ...";
+  if (defined.size() <= kMaxHintCandidates)
+    for (auto& [n, where] : defined) names.push_back(n);
   std::string hint = nearest_word(name, names);
   std::string msg = "undefined " + what + " '" + name + "' in " + in;
   if (!hint.empty()) msg += " (did you mean '" + hint + "'?)";

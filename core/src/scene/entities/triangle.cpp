@@ -14,15 +14,15 @@ constexpr AttrSpec kTriangleAttrs[] = {
     {"material", V::material_ref, true},
     {"normal", V::direction, false},
     {"point", V::point, false},
-    {"vertex1", V::point, true},
-    {"vertex2", V::point, true},
-    {"vertex3", V::point, true},
+    {"vertex1", V::position, true},
+    {"vertex2", V::position, true},
+    {"vertex3", V::position, true},
 };
 constexpr AttrSpec kTriAttrs[] = {
     {"material", V::material_ref, true},
-    {"v0", V::point, true},
-    {"v1", V::point, true},
-    {"v2", V::point, true},
+    {"v0", V::position, true},
+    {"v1", V::position, true},
+    {"v2", V::position, true},
 };
 
 // Whether the triangle has an area: in its own plane, or projected into the given one.
