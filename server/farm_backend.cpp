@@ -194,7 +194,11 @@ FarmBackend::FarmBackend(const Settings& s, int workers,
   m.config.feed_target = std::max(8, 2 * workers);
   m.config.block = milliseconds(std::clamp(s.heartbeat_ms, 50, 1000));
   m.setup = std::make_shared<farm::FarmSetup>(m.config);
-  m.pool = std::make_unique<farm::Pool>(farm::farm_connect_options(base, m.setup), 16);
+  // The requests' connections wait 2 s at most: a frozen Redis (stopped, swapping) answers
+  // a health check or a submission 503 in that time, not in the workers' 20.
+  farm::ConnectOptions requests = base;
+  requests.command_timeout = milliseconds(2000);
+  m.pool = std::make_unique<farm::Pool>(farm::farm_connect_options(requests, m.setup), 16);
   farm::NodeConfig nc;
   nc.connect = base;
   nc.farm = m.config;
@@ -319,7 +323,7 @@ FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene
 
 bool FarmBackend::finish_local(const JobRecord& job, JobState state, const std::string& code,
                                const std::string& error, const std::string* png,
-                               const RenderStats& st) {
+                               const RenderStats& st, int attempts) {
   Impl& m = *impl_;
   const auto ttl = milliseconds(static_cast<long long>(m.settings.result_ttl * 1000));
   farm::RecordRequest rr;
@@ -338,7 +342,7 @@ bool FarmBackend::finish_local(const JobRecord& job, JobState state, const std::
   rr.fields.emplace_back("reflection_rays", std::to_string(st.reflection_rays));
   rr.fields.emplace_back("error_estimate", format_number(st.error_estimate));
   // A render thread waits out a short outage here; a long one is the job limit's to end.
-  for (int attempt = 0; attempt < 5; ++attempt) {
+  for (int attempt = 0; attempt < attempts; ++attempt) {
     if (attempt > 0) std::this_thread::sleep_for(milliseconds(200 << attempt));
     try {
       if (png)
@@ -370,8 +374,20 @@ std::vector<JobRecord> FarmBackend::list(const std::string& client, size_t limit
     return out;
   });
   std::vector<JobRecord> jobs;
-  for (const std::string& id : ids)
-    if (auto rec = m.get(id); rec && rec->client == client) jobs.push_back(*rec);
+  std::vector<std::string> gone;
+  for (const std::string& id : ids) {
+    auto rec = m.get(id);
+    if (!rec) gone.push_back(id);  // expired: its ID leaves the client's list
+    else if (rec->client == client) jobs.push_back(*rec);
+  }
+  if (!gone.empty())
+    m.call([&](farm::FarmClient& fc) -> farm::Result<bool> {
+      const std::string key = fc.key("cjobs:" + client);
+      std::vector<std::string_view> zrem{"ZREM", key};
+      zrem.insert(zrem.end(), gone.begin(), gone.end());
+      if (auto r = fc.connection().command(zrem); !r) return r.error();
+      return true;
+    });
   return jobs;
 }
 

@@ -51,10 +51,11 @@ class FarmBackend {
   Outcome submit(JobRecord job, const std::string& scene_text, int max_jobs_of_client,
                  bool local);
   // Ends a local job in the farm: its image stored under its result key first, then the record
-  // (so a node that reads "done" finds the image). Retried briefly; false when Redis did not
-  // take it (the farm's job limit then ends the record).
+  // (so a node that reads "done" finds the image). Tried `attempts` times, briefly apart;
+  // false when Redis did not take it (the farm's job limit then ends the record).
   bool finish_local(const JobRecord& job, JobState state, const std::string& code,
-                    const std::string& error, const std::string* png, const RenderStats& stats);
+                    const std::string& error, const std::string* png, const RenderStats& stats,
+                    int attempts = 5);
 
   // Throw Unavailable when Redis does not answer.
   std::optional<JobRecord> get(const std::string& id);

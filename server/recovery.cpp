@@ -1,7 +1,7 @@
 // Restart recovery: the jobs the store kept are taken up again. Unfinished ones are queued
 // again with their uploaded textures (failed after a few attempts, canceled when their client
-// asked), done ones whose image has expired are dropped, and texture files no queued job names
-// are deleted.
+// asked; on a farm node, failed in the farm), done ones whose image has expired are dropped,
+// and texture files no queued job names are deleted.
 #include <algorithm>
 
 #include "rayfarm/load.h"
@@ -15,6 +15,18 @@ void Service::restore() {
   for (const JobRecord& r : jobs_->all()) {
     if (r.state == JobState::done && !blobs_.has(BlobKind::image, r.image_name)) {
       jobs_->remove(r.id);  // its image expired
+      continue;
+    }
+    if (farm_ && !is_final(r.state)) {
+      // A farm node's unfinished job is the farm's to answer for, on every node alike: it
+      // failed with the process (as the farm's janitor says once it notices, which it does
+      // by itself if Redis cannot be told now: one try, not a start held up), and the
+      // farm's record, not this node's, is the one every node reads.
+      farm_->finish_local(r, JobState::failed, "node_lost",
+                          "the node rendering it (" + farm_->node() +
+                              ") restarted; submit it again",
+                          nullptr, RenderStats{}, 1);
+      jobs_->remove(r.id);
       continue;
     }
     {

@@ -19,7 +19,8 @@
 -- (zset), queued/running/assembling (zsets by ms), deadlines (zset: running jobs with a limit,
 -- by the ms they fail at), ring:{p} (list of clients with unfed units),
 -- cj:{p}:{c} (list of that client's jobs with unfed units), work (stream, group 'render':
--- {job, unit, try}), idem:{c}:{key} (string -> job id), node:{n} (string, PX), nodes (zset),
+-- {job, unit, try}), idem:{#c}:{c}:{key} (string -> job id), node:{n} (string, PX),
+-- nodes (zset),
 -- lock:janitor; meta:build and meta:epoch are set by the client before the library loads.
 -- Channels: P..'events' ("job state done total"), P..'cancel' (job ids).
 local G = 'render'
@@ -158,6 +159,15 @@ local function retry_or_fail(P, job, unit, try, max_tries, why)
   return 'requeued'
 end
 
+-- A client's jobs, newest kept: GET /jobs lists 100, and a term of submissions must not
+-- grow Redis without end (the jobs themselves expire; their IDs here would not).
+local client_jobs_kept = 1000
+local function add_client_job(P, client, t, job)
+  local k = P .. 'cjobs:' .. client
+  redis.call('ZADD', k, t, job)
+  redis.call('ZREMRANGEBYRANK', k, 0, -(client_jobs_kept + 1))
+end
+
 -- ARGV: P, job, client, prio, units, max_active, max_jobs, target, ttl_ms, idem_key,
 --       idem_ttl_ms, opts, timeout_ms (0: none), field, value, ...
 --   -> {'accepted'|'exists'|'limit'|'full', job}
@@ -176,9 +186,11 @@ local function submit(_, a)
   if bad then return redis.error_reply(bad) end
   local ik = nil
   if idem ~= '' then
-    ik = P .. 'idem:' .. client .. ':' .. idem
+    -- The client's length first: names may hold ':', and ("bob", "x:K") must not meet
+    -- ("bob:x", "K"). A key whose job has expired is free again.
+    ik = P .. 'idem:' .. #client .. ':' .. client .. ':' .. idem
     local prev = redis.call('GET', ik)
-    if prev then return {'exists', prev} end
+    if prev and redis.call('EXISTS', P .. 'job:' .. prev) == 1 then return {'exists', prev} end
   end
   local jk = P .. 'job:' .. job
   if redis.call('EXISTS', jk) == 1 then return {'exists', job} end
@@ -195,7 +207,7 @@ local function submit(_, a)
   redis.call('HSET', jk, 'client', client, 'prio', prio, 'units', units, 'fed', 0,
              'done', 0, 'created_ms', t, 'ttl_ms', ttl, 'opts', a[12], 'timeout_ms', timeout)
   for i = 14, #a, 2 do redis.call('HSET', jk, a[i], a[i + 1]) end
-  redis.call('ZADD', P .. 'cjobs:' .. client, t, job)
+  add_client_job(P, client, t, job)
   if ik then redis.call('SET', ik, job, 'PX', idem_ttl) end
   if units == 0 then
     redis.call('HSET', jk, 'local', '1')
@@ -486,7 +498,7 @@ local function record(_, a)
   if result ~= '' then redis.call('HSET', jk, 'result', result) end
   if err ~= '' then redis.call('HSET', jk, 'error', err) end
   for i = 10, #a, 2 do redis.call('HSET', jk, a[i], a[i + 1]) end
-  redis.call('ZADD', P .. 'cjobs:' .. client, t, job)
+  add_client_job(P, client, t, job)
   if ttl > 0 then redis.call('PEXPIRE', jk, ttl) end
   event(P, job, state, 0, 0)
   return {'recorded', state}

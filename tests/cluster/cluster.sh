@@ -2,11 +2,13 @@
 # A farm of three real rayfarmd processes around a private redis-server (unix socket, AOF, in a
 # temp dir): (a) a job submitted to node 1 finishes byte-identical to `rayfarm render` while
 # node 2 (or 3) is killed with kill -9 holding units; (b) its status and image from every node;
-# (c) DELETE on node 3 stops a job running on nodes 1-2 within half a second; (d) Redis down: 503
-# with Retry-After on POST /render and /healthz, and after a restart from the same AOF the farm
-# works again; (e) a small job sent after a big one finishes first; (f) a node frozen past its
-# lease: late results dropped; (g) Redis out of memory: 503; (h) small and textured jobs stay
-# on their node, seen from every node. Usage: cluster.sh BUILD_DIR.
+# (c) DELETE on node 3 stops a job running on nodes 1-2 within half a second; (d) Redis frozen:
+# 503 from /healthz within seconds; Redis down: 503 with Retry-After on POST /render and
+# /healthz, and after a restart from the same AOF the farm works again; (e) a small job sent
+# after a big one finishes first; (f) a node frozen past its lease: late results dropped; (g)
+# Redis out of memory: 503; (h) small and textured jobs stay on their node, seen from every
+# node; (j) a node killed rendering its own job: failed on every node, after its restart from
+# its results folder too. Usage: cluster.sh BUILD_DIR.
 # Exit 77 (skipped) without redis-server, unless RAYFARM_REQUIRE_REDIS=1.
 set -euo pipefail
 # With pipefail, `A | grep -q` fails now and then: grep -q leaves at its first match and A
@@ -45,12 +47,14 @@ start_redis() {
 # another process holds anyway is retried with a fresh one.
 start_node() {
   local n=$1 port attempt lines
+  local keep=()  # node 2 keeps its jobs on disk, as a node with --results-dir does
+  [ "$n" = 2 ] && keep=(--results-dir "$dir/results2")
   for attempt in 1 2 3 4 5 6 7 8; do
     lines=0; [ -f "$dir/node$n.log" ] && lines=$(wc -l <"$dir/node$n.log")
     port=$((20000 + RANDOM % 12000))
     "$build/server/rayfarmd" --host 127.0.0.1 --port "$port" --no-access-log --workers 1 \
       --redis "unix://$sock" --node-id "node$n" --heartbeat-ms 100 --lease-ms 600 \
-      --unit-work 8e6 --distribute-work 1e6 >>"$dir/node$n.log" 2>&1 &
+      --unit-work 8e6 --distribute-work 1e6 "${keep[@]}" >>"$dir/node$n.log" 2>&1 &
     pids[$n]=$!; ports[$n]=$port
     for _ in $(seq 100); do
       curl -sf -m 2 "http://127.0.0.1:$port/healthz" >/dev/null && return 0
@@ -248,10 +252,29 @@ kill -9 "${pids[2]}"; wait "${pids[2]}" 2>/dev/null || true; pids[2]=""
 for _ in $(seq 100); do [ "$(state_on 1 "$tex")" = failed ] && break; sleep 0.1; done
 curl -s "$(url 1 "/jobs/$tex")" | grep '"code": *"node_lost"' >/dev/null \
   || fail "node 2's own job after its death: $(curl -s "$(url 1 "/jobs/$tex")" | head -c 400)"
+# Node 2 comes back with its results folder, which still holds the job unfinished: the farm's
+# answer stands on every node, node 2 included (it does not render the job again).
 start_node 2
-echo "cluster: (j) a node killed rendering its own job: the job failed with node_lost"
+sleep 1
+for n in 1 2 3; do
+  [ "$(state_on "$n" "$tex")" = failed ] || fail "after node 2's restart, node $n says the job is $(state_on "$n" "$tex")"
+done
+echo "cluster: (j) a node killed rendering its own job: the job failed with node_lost, on every node after its restart too"
 
-# (d) Redis down, then back from its AOF.
+# (d) Redis frozen (stopped, not refusing): a health check is answered 503 in a few seconds,
+# not after the workers' 20 s timeout. Then Redis down, and back from its AOF.
+kill -STOP "$redis_pid"
+t1=$EPOCHREALTIME
+code=$(curl -s -m 15 -o /dev/null -w '%{http_code}' "$(url 3 /healthz)")
+took=$(awk -v a="$t1" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.1f", b - a }')
+kill -CONT "$redis_pid"
+[ "$code" = 503 ] || fail "/healthz with Redis frozen gave $code after $took s"
+awk -v t="$took" 'BEGIN { exit !(t < 6) }' || fail "/healthz with Redis frozen took $took s"
+echo "cluster: (d) Redis frozen: /healthz said 503 in $took s"
+for _ in $(seq 100); do
+  [ "$(curl -s -o /dev/null -w '%{http_code}' "$(url 3 /healthz)")" = 200 ] && break
+  sleep 0.1
+done
 kill -9 "$redis_pid"; wait "$redis_pid" 2>/dev/null || true; redis_pid=""
 headers=$(curl -s -D - -o /dev/null --data-binary @scenes/cho.txt "$(url 1 "/render?width=64&height=48")")
 [[ ${headers%%$'\n'*} == *" 503"* ]] || fail "POST /render without Redis: ${headers%%$'\n'*}"

@@ -84,6 +84,51 @@ TEST_F(FarmFunctions, SubmitIsIdempotentByJobIdAndByIdempotencyKey) {
   EXPECT_EQ(drain(n), "j1:0 j1:1");
 }
 
+// Keys of different clients never meet, whatever ':' their names hold; and a key whose job
+// has expired is free again (a replay then submits anew, not a 503 until the key expires).
+TEST_F(FarmFunctions, IdempotencyKeysOfClientsNeverMeetAndOutliveNoJob) {
+  TestNode n = node("n1");
+  SubmitRequest q;
+  q.job = "bobs";
+  q.client = "name:bob";
+  q.idempotency_key = "x:K";
+  EXPECT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
+  q.job = "other";
+  q.client = "name:bob:x";
+  q.idempotency_key = "K";
+  auto other = n->submit(q);
+  ASSERT_TRUE(other);
+  EXPECT_EQ(other->status, SubmitStatus::Accepted);
+  EXPECT_TRUE(*n->job("other"));
+
+  // The first job expires (its record is gone): its key gives a new job, not the old one.
+  EXPECT_EQ(integer({"DEL", prefix_ + "job:bobs"}), 1);
+  q.job = "bobs2";
+  q.client = "name:bob";
+  q.idempotency_key = "x:K";
+  auto replay = n->submit(q);
+  ASSERT_TRUE(replay);
+  EXPECT_EQ(replay->status, SubmitStatus::Accepted);
+  EXPECT_TRUE(*n->job("bobs2"));
+  q.job = "bobs3";
+  EXPECT_EQ(n->submit(q)->job, "bobs2");  // and the key now maps to it
+}
+
+// A client's list of jobs keeps its newest 1,000: the jobs expire, their IDs there would
+// not, and a term of submissions must not grow Redis without end.
+TEST_F(FarmFunctions, AClientsJobListKeepsItsNewestThousand) {
+  TestNode n = node("n1");
+  RecordRequest r;
+  r.client = "A";
+  r.state = EndState::Done;
+  r.result = "img";
+  for (int i = 0; i < 1005; ++i) {
+    r.job = "j" + std::to_string(i);
+    ASSERT_TRUE(n->record(r));
+  }
+  EXPECT_EQ(integer({"ZCARD", prefix_ + "cjobs:A"}), 1000);
+}
+
 TEST_F(FarmFunctions, FirstResultWinsAndALateCopyIsADuplicate) {
   TestNode n = node("n1");
   submit(n, "j", "A", 2);
