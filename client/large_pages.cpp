@@ -1,19 +1,24 @@
-// Large allocations on transparent huge pages, for this program only (it replaces the global
-// operator new and delete). A scene of 100,000 spheres fills some 100 MB of arrays of a few
-// megabytes each (the text, the objects, the hierarchy and its build arrays, the bins and
-// buffers), each touched once: in 4 KB pages that is some 25,000 page faults, which on the
-// virtual machines measured cost more than parsing the file (random-100k 0.63 -> 0.46 s).
-// A block of 2 MB or more gets a mapping of its own, a multiple of 2 MB aligned to 2 MB and
-// marked MADV_HUGEPAGE (transparent huge pages in `madvise` mode, Debian's default), so it
-// faults once per 2 MB. Smaller ones go to malloc, whose heap is on huge pages too (below):
-// the preparation's arrays of a few hundred KB cost grid-8000 and random-100k 8-15% of
-// their runs in 4 KB faults, and in the heap they share huge pages instead of holding a
-// 2 MB mapping each (as from 256 KB before): 8 MB less memory for kinds-mix (20.3 -> 12.3
-// MB) and grid-8000 (14.3 -> 6.3). That is what counts once the machine has been idle a few
-// seconds, when memory new to the process costs 0.9-1.7 ms per MB (0.07 when it was freed
-// just before). Freed, a mapping is kept for the next large blocks, and for blocks from
-// 256 KB where its pages are in memory already (below): 4-8 MB less for shallow-60k,
-// mirror-room-20k, lights-inside-50k and camera-inside-50k.
+// Large allocations for this program only (it replaces the global operator new and delete).
+// A scene of 100,000 spheres fills some 100 MB of arrays of a few megabytes each (the text,
+// the objects, the hierarchy and its build arrays, the bins and buffers), each touched once,
+// and memory new to the process is what a run after a pause pays for most.
+// A block of 2 MB or more gets a mapping of its own, a multiple of 2 MB aligned to 2 MB, in
+// 4 KB pages. It was marked MADV_HUGEPAGE (one fault per 2 MB), which paid on the virtual
+// machines first measured, where a 4 KB fault cost 12 us (random-100k 0.63 -> 0.46 s). On
+// the later ones a free 2 MB block is handed back to the host (virtio-balloon free page
+// reporting, order 9) and a huge page faulted into it after a pause costs 2.9 ms per MB,
+// against 1.0 in 4 KB pages (32 MB: 92 against 30 ms, medians of 6; right after a run 0.13
+// against 0.45): without the mark, runs that follow a POV-Ray run take 0.84-0.95 times as long
+// (tiny-big-150k 0.276 -> 0.231 s, random-100k 0.268 -> 0.237, shallow-60k 0.212 -> 0.200,
+// kinds-mix 0.151 -> 0.142, medians of 7; docs/performance.md, thirtieth round).
+// Smaller ones go to malloc, whose heap is on huge pages (below): the preparation's arrays of
+// a few hundred KB cost grid-8000 and random-100k 8-15% of their runs in 4 KB faults, and in
+// the heap they share huge pages instead of holding a mapping each: 8 MB less memory for
+// kinds-mix (20.3 -> 12.3 MB) and grid-8000 (14.3 -> 6.3). (Leaving the heap in 4 KB pages
+// too measured no better here: shallow-60k 0.205 s, cho 27 against 26 ms.) Freed, a mapping
+// is kept for the next large blocks, and for blocks from 256 KB where its pages are in
+// memory already (below): 4-8 MB less for shallow-60k, mirror-room-20k, lights-inside-50k
+// and camera-inside-50k.
 // While a scene loads, a thread faults in the heap's page after next on the idle core
 // (Warming in large_pages.h; below).
 #include <malloc.h>
@@ -129,7 +134,7 @@ bool keep_spare(std::uintptr_t base, std::size_t length) {
   return true;
 }
 
-// A fresh 2 MB-aligned mapping of `length` bytes marked for huge pages; 0 on failure.
+// A fresh 2 MB-aligned mapping of `length` bytes (4 KB pages: see the top); 0 on failure.
 std::uintptr_t map_fresh(std::size_t length) {
   // Map 2 MB more than needed and cut an aligned range out of it.
   void* raw = mmap(nullptr, length + kHuge, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
@@ -140,7 +145,6 @@ std::uintptr_t map_fresh(std::size_t length) {
   if (base > start) munmap(raw, base - start);
   if (const std::uintptr_t end = start + length + kHuge; end > base + length)
     munmap(reinterpret_cast<void*>(base + length), end - (base + length));
-  madvise(reinterpret_cast<void*>(base), length, MADV_HUGEPAGE);
   return base;
 }
 
@@ -261,7 +265,7 @@ void release(void* p) noexcept {
   if (p && !unmap_large(p)) std::free(p);
 }
 
-// The small blocks' heap (glibc's, grown with brk) on huge pages too: its first growth
+// The small blocks' heap (glibc's, grown with brk) on huge pages: its first growth
 // reserves 128 MB (address space; pages are touched as used), that range is marked
 // MADV_HUGEPAGE and never trimmed, and one arena serves every thread (the others' arenas
 // would be 4 KB pages again). A scene that the general parser reads (any kind beyond
