@@ -1,6 +1,7 @@
 #include "redis_url.h"
 
 #include <charconv>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 
@@ -88,6 +89,9 @@ Result<std::string> load_redis_password(const std::optional<std::string>& file, 
   if (file && env)
     return config("both --redis-password-file and RAYFARM_REDIS_PASSWORD are set; use one");
   if (!file) return std::string(env ? env : "");
+  std::error_code ec;
+  if (std::filesystem::is_directory(*file, ec))
+    return config("the Redis password file " + *file + " is a folder, not a file");
   std::ifstream in(*file, std::ios::binary);
   if (!in) return config("cannot read the Redis password file " + *file);
   std::string s((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

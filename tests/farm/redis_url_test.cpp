@@ -95,6 +95,11 @@ TEST(RedisPassword, RefusesBothSourcesAMissingFileAndAnEmptyOne) {
   std::ofstream(path) << "a\nb\n";
   EXPECT_FALSE(load_redis_password(path, nullptr));
   std::remove(path.c_str());
+  // A folder is said to be one (the library's words were "basic_filebuf::underflow error").
+  auto folder = load_redis_password(testing::TempDir(), nullptr);
+  ASSERT_FALSE(folder);
+  EXPECT_NE(folder.error().message.find("is a folder, not a file"), std::string::npos)
+      << folder.error().message;
 }
 
 }  // namespace
