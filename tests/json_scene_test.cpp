@@ -232,6 +232,11 @@ TEST(JsonScene, AMisspeltOrMistypedCameraOrMaterialsIsOneError) {
   }
 }
 
+TEST(JsonScene, ReportsATypeThatIsNotAString) {
+  Diagnostic d = single_error(scene_with_sphere(kGoodSphere, R"(, "lights": [{"type": 5}])"));
+  EXPECT_TRUE(is_diag(d, "json-type", "/lights/0/type", "expected a string: \"light\""));
+}
+
 TEST(JsonScene, ReportsAValueOfTheWrongType) {
   Diagnostic d =
       single_error(scene_with_sphere(R"("material": "m", "center": [0, 0, -5], "radius": "1")"));

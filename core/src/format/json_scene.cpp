@@ -172,11 +172,13 @@ class JsonSceneReader {
       diags_.error("missing-attribute", "object needs \"type\": " + expected, at(path));
       return;
     }
-    const EntitySpec* spec = type->is_string() ? find_entity(type->get<std::string>()) : nullptr;
+    // A type of another JSON type ("type": 5) is that, not an unknown kind named "5".
+    if (!expect(type->is_string(), *type, "a string: " + expected, child(path, "type"))) return;
+    const EntitySpec* spec = find_entity(type->get<std::string>());
     if (!spec || spec->role != role) {
-      std::string got = type->is_string() ? type->get<std::string>() : type->dump();
+      std::string got = type->get<std::string>();
       std::string hint = nearest_word(got, kinds);
-      std::string why(type->is_string() ? unsupported_entity(got) : std::string_view());
+      std::string why(unsupported_entity(got));
       diags_.error(why.empty() ? "unknown-entity" : "unsupported-entity",
                    why.empty() ? "unknown " + std::string(role == EntityRole::light ? "light" : "object") +
                                      " type \"" + printable(got) + "\" (expected " + expected + ")" +
