@@ -45,7 +45,7 @@ constexpr std::size_t kHuge = std::size_t{1} << 21;
 constexpr std::size_t kMinBlock = std::size_t{1} << 21;
 // Blocks from kMedium up to kMinBlock are cut from a spare when there is one (below), in
 // whole kUnits; otherwise they come from malloc. A block of either kind starts its piece,
-// so a block of exactly 2 MB (a hash table's slots) holds one huge page, not two.
+// so a block of exactly 2 MB (a hash table's slots) takes one 2 MB piece, not two.
 constexpr std::size_t kMedium = std::size_t{1} << 18;
 constexpr std::size_t kUnit = std::size_t{1} << 16;
 
@@ -145,6 +145,8 @@ std::uintptr_t map_fresh(std::size_t length) {
   if (base > start) munmap(raw, base - start);
   if (const std::uintptr_t end = start + length + kHuge; end > base + length)
     munmap(reinterpret_cast<void*>(base + length), end - (base + length));
+  // Said, not left to the kernel: with transparent huge pages "always" it would use them.
+  madvise(reinterpret_cast<void*>(base), length, MADV_NOHUGEPAGE);
   return base;
 }
 

@@ -1,5 +1,6 @@
-// The client's allocator (large_pages.cpp): huge pages for the heap and for large blocks, and
-// a thread that faults in the heap's page after next while the program loads a scene.
+// The client's allocator (large_pages.cpp): huge pages for the small blocks' heap, large blocks
+// in mappings of their own (4 KB pages) kept for reuse, and a thread that faults in the heap's
+// page after next while the program loads a scene.
 #pragma once
 
 #include <cstdint>

@@ -380,14 +380,18 @@ std::vector<JobRecord> FarmBackend::list(const std::string& client, size_t limit
     if (!rec) gone.push_back(id);  // expired: its ID leaves the client's list
     else if (rec->client == client) jobs.push_back(*rec);
   }
-  if (!gone.empty())
-    m.call([&](farm::FarmClient& fc) -> farm::Result<bool> {
-      const std::string key = fc.key("cjobs:" + client);
-      std::vector<std::string_view> zrem{"ZREM", key};
-      zrem.insert(zrem.end(), gone.begin(), gone.end());
-      if (auto r = fc.connection().command(zrem); !r) return r.error();
-      return true;
-    });
+  if (!gone.empty()) {
+    try {  // tidying only: the list is answered whether or not it is done
+      m.call([&](farm::FarmClient& fc) -> farm::Result<bool> {
+        const std::string key = fc.key("cjobs:" + client);
+        std::vector<std::string_view> zrem{"ZREM", key};
+        zrem.insert(zrem.end(), gone.begin(), gone.end());
+        if (auto r = fc.connection().command(zrem); !r) return r.error();
+        return true;
+      });
+    } catch (const Unavailable&) {
+    }
+  }
   return jobs;
 }
 

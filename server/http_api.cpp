@@ -121,11 +121,12 @@ void HttpApi::harden() {
   server_.set_pre_routing_handler([this](const Request& req, Response& res) {
     request_start = Clock::now();
     GuardedServer::head_complete();
-    // A target in absolute form is routed by its path; the library took it whole.
-    if (req.path.find("://") != std::string::npos) {
+    // A target in absolute form is routed by its path; the library took it whole. (Told
+    // from the target as sent: "http%3A//x/healthz" is no absolute form.)
+    if (std::string target = origin_form(req.target); target != req.target) {
       auto& request = const_cast<Request&>(req);  // the library's own, non-const object
       request.path = origin_form(req.path);
-      request.target = origin_form(req.target);
+      request.target = std::move(target);
     }
     // Only the server names the client: a header claiming a name is not the client's to send.
     const_cast<Request&>(req).headers.erase(kClientHeader);

@@ -19,14 +19,21 @@ void Service::restore() {
     }
     if (farm_ && !is_final(r.state)) {
       // A farm node's unfinished job is the farm's to answer for, on every node alike: it
-      // failed with the process (as the farm's janitor says once it notices, which it does
-      // by itself if Redis cannot be told now: one try, not a start held up), and the
-      // farm's record, not this node's, is the one every node reads.
-      farm_->finish_local(r, JobState::failed, "node_lost",
-                          "the node rendering it (" + farm_->node() +
-                              ") restarted; submit it again",
-                          nullptr, RenderStats{}, 1);
-      jobs_->remove(r.id);
+      // failed with the process, and the farm's record, not this node's, is the one every
+      // node reads. If Redis cannot be told now (one try: a start is not held up), this node
+      // says failed too, and the farm's job limit ends the farm's record.
+      const std::string why = "the node rendering it restarted; submit it again";
+      if (farm_->finish_local(r, JobState::failed, "node_lost", why, nullptr, RenderStats{}, 1)) {
+        jobs_->remove(r.id);
+      } else {
+        jobs_->transition(r.id, {JobState::queued, JobState::running}, [&](JobRecord& x) {
+          x.state = JobState::failed;
+          x.error_code = "node_lost";
+          x.error = why;
+          x.finished_ms = now_ms();
+          x.textures.clear();
+        });
+      }
       continue;
     }
     {

@@ -113,7 +113,14 @@ std::optional<Settings> parse_settings(int argc, char** argv, int& exit_code) {
   app.add_option("--redis-password-file", s.redis_password_file,
                  "file holding the Redis password (or set RAYFARM_REDIS_PASSWORD)")
       ->envname("RAYFARM_REDIS_PASSWORD_FILE");
-  add("--node-id", s.node_id, "this node's name in the farm (default host:port:pid:start-ms)");
+  // It is a Redis key's part, a metric label and a message's word: a plain name, not empty.
+  add("--node-id", s.node_id, "this node's name in the farm (default host:port:pid:start-ms)")
+      ->check([](const std::string& v) -> std::string {
+        static const std::regex name(R"([A-Za-z0-9._:@-]{1,128})");
+        if (std::regex_match(v, name)) return {};
+        return "must be 1 to 128 letters, digits and . _ : @ - (no spaces), got '" +
+               v.substr(0, 40) + (v.size() > 40 ? "...'" : "'");
+      });
   add("--redis-prefix", s.redis_prefix, "prefix of the farm's Redis keys");
   add("--heartbeat-ms", s.heartbeat_ms, "how often a farm node renews its units' leases")
       ->check(CLI::Range(10, 600000));

@@ -236,6 +236,8 @@ TEST(ImageIo, MalformedPpmHeadersAreErrors) {
   EXPECT_EQ(decode_error("P3 1 1 255 -1 2 3"), "bad PPM data: sample 1, '-1', is not a whole number");
   EXPECT_EQ(decode_error("P3 1 1 200 1 2 201"), "PPM sample 201 exceeds maxval 200");
   // As written, past the 2^32 the reader saturates at, and cut at 20 digits.
+  EXPECT_EQ(decode_error("P3 1 1 5000000000 0 0 0"),
+            "bad PPM header: maxval 5000000000 is not in 1..65535");
   EXPECT_EQ(decode_error("P3 1 1 255 0 0 4294967296"), "PPM sample 4294967296 exceeds maxval 255");
   EXPECT_EQ(decode_error("P3 1 1 255 0 0 " + std::string(30, '9')),
             "PPM sample " + std::string(20, '9') + "... exceeds maxval 255");

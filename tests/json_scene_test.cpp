@@ -225,6 +225,13 @@ TEST(JsonScene, AMisspeltOrMistypedCameraOrMaterialsIsOneError) {
        "unknown-key", "/materals", "did you mean \"materials\"?"},
       {"{\"camera\": " + camera + ", \"materials\": {\"m\": 5}, " + objects + "}",
        "json-type", "/materials/m", "expected an object, got a number"},
+      // Containers of the wrong type: an array of cameras, materials written as the lights
+      // and objects are (an array of named objects).
+      {"{\"cameras\": [], \"materials\": " + materials + ", " + objects + "}", "json-type",
+       "/cameras", "expected an object of named cameras, got an array"},
+      {"{\"camera\": " + camera + ", \"materials\": [{\"name\": \"m\", \"ambient\": 1}], " +
+           objects + "}",
+       "json-type", "/materials", "expected an object of named materials, got an array"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.text);

@@ -155,8 +155,8 @@ std::string vm_flags(std::uintptr_t at) {
 }
 
 // The small blocks' heap is marked for huge pages from the start (VmFlags "hg" in smaps); a
-// large block's own mapping is not (a fresh huge page is the host's coldest memory on the
-// virtual machines measured: large_pages.cpp).
+// large block's own mapping is marked for none ("nh": a fresh huge page is the host's coldest
+// memory on the virtual machines measured, large_pages.cpp).
 TEST(LargePages, SmallBlocksComeFromAHeapMarkedForHugePagesAndLargeOnesDoNot) {
   if (!std::ifstream("/sys/kernel/mm/transparent_hugepage/enabled"))
     GTEST_SKIP() << "this kernel has no transparent huge pages";
@@ -172,6 +172,7 @@ TEST(LargePages, SmallBlocksComeFromAHeapMarkedForHugePagesAndLargeOnesDoNot) {
   const std::string flags = vm_flags(address(large.get()));
   ASSERT_FALSE(flags.empty()) << "the large block's mapping is not in smaps";
   EXPECT_EQ(flags.find(" hg"), std::string::npos) << flags;
+  EXPECT_NE(flags.find(" nh"), std::string::npos) << flags;  // nor left to the kernel's mode
 }
 
 // Nor do small blocks fill 4 KB pages first (a fault each, some 12 us on the virtual machines

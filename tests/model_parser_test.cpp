@@ -762,10 +762,15 @@ TEST(ModelParser, ReportsAStrayBraceBeforeAttributesOnce) {
   for (const auto& [line, stray] :
        {std::pair<std::string, std::string>{"sphere s { material m { center 0 0 -5 radius 1 }",
                                             "{ center"},
-        {"sphere s { material m center 0 0 -5 { radius 1 }", "{ radius"}}) {
+        {"sphere s { material m center 0 0 -5 { radius 1 }", "{ radius"},
+        // Closed again: the block's attributes are still the entity's, and so are the ones
+        // after it.
+        {"sphere s { material m { center 0 0 -5 } radius 1 }", "{ center"},
+        {"sphere s { material m center 0 0 -5 { radius 1 } }", "{ radius"}}) {
     SCOPED_TRACE(line);
     Diagnostic d = single_error(line + "\n");
-    EXPECT_TRUE(is_diag(d, "syntax", 3, column_of(line, stray), "unexpected '{' inside sphere 's'"));
+    EXPECT_TRUE(
+        is_diag(d, "syntax", 3, column_of(line, stray), "unexpected '{' inside sphere 's'"));
   }
 }
 

@@ -529,6 +529,12 @@ TEST(Cpsc102, ATriangleTooLargeForTheProgramsArithmeticIsNotDrawnAndSaidSo) {
   EXPECT_EQ(lost[0].where.line, 3);
   EXPECT_EQ(lost[0].message.rfind("triangle 't': the course's program cannot find its plane", 0),
             0u);
+  // Too small, and tilted, so that no component of the cross product is 0 but their squares
+  // are: the unit normal is infinite, and the program draws nothing either.
+  const Scene tiny = scene_from(kCamera + "material m { ambient 1 }\ntri t { material m v0 0 0 0 "
+                                          "v1 1e-100 3e-101 2e-101 v2 2e-101 1e-100 5e-101 }\n");
+  EXPECT_EQ(lints(tiny, course()).size(), 1u);
+  EXPECT_TRUE(lints(tiny, {}).empty());
 }
 
 // ---------------------------------------------------------------------------------------

@@ -2809,6 +2809,14 @@ TEST(ServerFarmSettings, RedisOptionsAreParsedCheckedAndRefusedWhereUnsafe) {
                       "--lease-ms", "600"},
                      code));
   EXPECT_EQ(code, 2);
+  // A node's name is a plain word: not empty, no spaces, newlines or '*', not 3,000 long.
+  for (const std::string& bad : {std::string(""), std::string("a b"), std::string("n\n1"),
+                                std::string("n*"), std::string(129, 'n')}) {
+    code = 0;
+    EXPECT_FALSE(parse_flags({"rayfarmd", "--node-id", bad.c_str()}, code)) << bad;
+    EXPECT_EQ(code, 2) << bad;
+  }
+  EXPECT_TRUE(parse_flags({"rayfarmd", "--node-id", "lab-3.cs.example.edu:8080"}, code));
   // No --redis-password: the password is not an option at all.
   code = 0;
   EXPECT_FALSE(parse_flags({"rayfarmd", "--redis-password", "secret"}, code));
@@ -2911,10 +2919,14 @@ TEST(ServerHardening, AnAbsoluteFormTargetIsRoutedByItsPath) {
   auto typo = ask("GET http://x/healthz?sp=2 HTTP/1.1");
   ASSERT_TRUE(typo);
   EXPECT_EQ(typo->status, 400);
-  // Only a scheme and authority go: a path naming a URL inside it is still that path.
+  // Only a scheme and authority go: a path naming a URL inside it is still that path, and an
+  // encoded one is no absolute form.
   auto inside = ask("GET /web/http://x/healthz HTTP/1.1");
   ASSERT_TRUE(inside);
   EXPECT_EQ(inside->status, 404);
+  auto encoded = ask("GET http%3A//x/healthz HTTP/1.1");
+  ASSERT_TRUE(encoded);
+  EXPECT_EQ(encoded->status, 404);
 }
 
 // Bodies the library would not read are never read as the next request: two lengths, a

@@ -118,15 +118,28 @@ TEST_F(FarmFunctions, IdempotencyKeysOfClientsNeverMeetAndOutliveNoJob) {
 // not, and a term of submissions must not grow Redis without end.
 TEST_F(FarmFunctions, AClientsJobListKeepsItsNewestThousand) {
   TestNode n = node("n1");
+  // 1,005 older jobs, a millisecond apart, then one more recorded now.
+  for (int i = 0; i < 1005; ++i)
+    EXPECT_EQ(integer({"ZADD", prefix_ + "cjobs:A", std::to_string(1000 + i),
+                       "j" + std::to_string(i)}),
+              1);
   RecordRequest r;
+  r.job = "now";
   r.client = "A";
   r.state = EndState::Done;
   r.result = "img";
-  for (int i = 0; i < 1005; ++i) {
-    r.job = "j" + std::to_string(i);
-    ASSERT_TRUE(n->record(r));
-  }
+  ASSERT_TRUE(n->record(r));
   EXPECT_EQ(integer({"ZCARD", prefix_ + "cjobs:A"}), 1000);
+  auto rank = [&](const std::string& job) {
+    auto z = raw().command({"ZRANK", prefix_ + "cjobs:A", job});
+    EXPECT_TRUE(z);
+    return z && !z->is_nil() ? z->integer() : -1;
+  };
+  EXPECT_EQ(rank("now"), 999);
+  EXPECT_EQ(rank("j1004"), 998);
+  EXPECT_EQ(rank("j6"), 0);
+  EXPECT_EQ(rank("j5"), -1);  // the six oldest went
+  EXPECT_EQ(rank("j0"), -1);
 }
 
 TEST_F(FarmFunctions, FirstResultWinsAndALateCopyIsADuplicate) {

@@ -140,8 +140,9 @@ void lint_reference_triangles(const Scene& scene, const RenderOptions& options,
     auto v3 = [](const glm::dvec3& v) { return V3{v.x, v.y, v.z}; };
     const V3 a = v3(t->vertex[0]), b = v3(t->vertex[1]), c = v3(t->vertex[2]);
     const V3 n = cpsc102::unit(cpsc102::cross(cpsc102::sub(b, a), cpsc102::sub(c, b)));
-    // Past the overflow the unit is 0 (times 1 / inf), past the underflow not a number.
-    if (cpsc102::dot(n, n) > 0.5) continue;
+    // Past the overflow the unit is 0 (times 1 / inf); past the underflow not a number, or
+    // infinite where every component is tiny but not 0.
+    if (const double d = cpsc102::dot(n, n); d > 0.5 && d < 2) continue;
     diags.warning("course-triangle-lost",
                   label(entity_spec(o.kind).keyword, o.name) +
                       ": the course's program cannot find its plane (the cross product of its "

@@ -68,7 +68,9 @@ class JsonSceneReader {
       if (key == "camera") {
         read_entity(EntityKind::camera, "", value, path, scene);
       } else if (key == "cameras") {
-        if (expect(value.is_object(), value, "an object of named cameras", path))
+        if (!expect(value.is_object(), value, "an object of named cameras", path))
+          stand_in(key, value, path, scene);
+        else
           for (auto& [name, cam] : value.items()) {
             // (Only the one camera under "camera" goes unnamed.)
             if (name.empty())
@@ -79,11 +81,15 @@ class JsonSceneReader {
             read_entity(EntityKind::camera, name, cam, child(path, name), scene);
           }
       } else if (key == "materials") {
-        if (expect(value.is_object(), value, "an object of named materials", path))
+        if (!expect(value.is_object(), value, "an object of named materials", path))
+          stand_in(key, value, path, scene);
+        else
           for (auto& [name, mat] : value.items())
             read_entity(EntityKind::material, name, mat, child(path, name), scene);
       } else if (key == "textures") {
-        if (expect(value.is_object(), value, "an object of named textures", path))
+        if (!expect(value.is_object(), value, "an object of named textures", path))
+          stand_in(key, value, path, scene);
+        else
           for (auto& [name, tex] : value.items())
             read_entity(EntityKind::texture, name, tex, child(path, name), scene);
       } else if (key == "lights") {
@@ -118,8 +124,10 @@ class JsonSceneReader {
   }
 
   // A misspelt "camera", "cameras", "materials" or "textures" (the key it probably meant is
-  // `meant`) is one error: stand-ins of that kind, with the names under it, keep "no camera"
-  // and "undefined material" from following it, as a misspelt keyword's in a model file.
+  // `meant`), or one of the wrong type, is one error: stand-ins of that kind, with the names
+  // under it (an object's keys, or an array's "name"s, as lights and objects are written),
+  // keep "no camera" and "undefined material" from following it, as a misspelt keyword's do
+  // in a model file.
   void stand_in(const std::string& meant, const Json& value, const std::string& path,
                 SceneDesc& scene) {
     if (meant == "camera") return add_stand_in(EntityKind::camera, "", path, scene);
@@ -128,8 +136,20 @@ class JsonSceneReader {
                             : meant == "textures"  ? EntityKind::texture
                                                    : EntityKind::sphere;
     if (kind == EntityKind::sphere) return;
-    if (!value.is_object()) return add_stand_in(kind, "", path, scene);
-    for (auto& [name, entry] : value.items()) add_stand_in(kind, name, child(path, name), scene);
+    const size_t before = scene.entities.size();
+    if (value.is_object()) {
+      for (auto& [name, entry] : value.items()) add_stand_in(kind, name, child(path, name), scene);
+    } else if (value.is_array()) {
+      for (size_t i = 0; i < value.size(); ++i) {
+        if (!value[i].is_object()) continue;
+        const auto name = value[i].find("name");
+        if (name != value[i].end() && name->is_string())
+          add_stand_in(kind, name->get<std::string>(), child(path, i), scene);
+      }
+    }
+    // A camera even where none is named: "no camera" would follow otherwise.
+    if (kind == EntityKind::camera && scene.entities.size() == before)
+      add_stand_in(kind, "", path, scene);
   }
 
   void add_stand_in(EntityKind kind, const std::string& name, const std::string& path,

@@ -206,6 +206,7 @@ class ModelParser {
     SmallVec<int, 8> first_line;
     first_line.assign(spec.attrs.size(), 0);
     e.attrs.reserve(spec.attrs.size());
+    int stray = 0;  // braces opened inside the entity before its own attributes
     for (;;) {
       const Token& t = lex_.peek();
       if (t.kind == Token::end) {
@@ -214,19 +215,29 @@ class ModelParser {
         break;
       }
       if (t.kind == Token::close) {
+        // A stray '{' closed again before more of this entity ("{ worlddim 8 6 } viewpoint
+        // ..."): that '}' is the stray's, not the entity's end.
+        const Token& after = lex_.peek(1);
+        const bool closes_stray =
+            stray > 0 && (after.kind == Token::close ||
+                          (after.kind == Token::word && find_attr(spec, after.text)));
         lex_.next();
-        break;
+        if (!closes_stray) break;
+        --stray;
+        continue;
       }
       if (t.kind == Token::open) {
         diags_.error("syntax", "unexpected '{' inside " + describe_entity(e), at(t));
-        // A stray brace before this entity's own attributes ("material m { center ...") is
-        // the typo: the attributes after it are still this entity's, and its '}' still its
-        // end. Anything else is a block of its own, skipped whole.
+        // A stray brace before this entity's own attributes ("sphere s { material m {
+        // center ...") is the typo: the attributes after it are still this entity's. Anything
+        // else is a block of its own, skipped whole.
         const Token& after = lex_.peek(1);
-        if (after.kind == Token::word && find_attr(spec, after.text))
+        if (after.kind == Token::word && find_attr(spec, after.text)) {
           lex_.next();
-        else
+          ++stray;
+        } else {
           skip_block();
+        }
         continue;
       }
       if (const AttrSpec* attr = find_attr(spec, t.text)) {

@@ -41,7 +41,7 @@ std::string json_double(double v) {
 }
 
 // As nlohmann's dump(2) lays JSON out, but a double in the shortest text that reads back as
-// it (format_number, as the model writer's): the library's Grisu2 is not always shortest
+// it (json_double, above): the library's Grisu2 is not always shortest
 // (1e23 came out 9.999999999999999e+22).
 void write_pretty(const Json& j, int indent, std::string& out) {
   const std::string pad(static_cast<size_t>(indent) + 2, ' ');

@@ -162,6 +162,7 @@ std::optional<Image> decode_ppm(std::string_view s, std::string* error, long lon
     return fail(error, "bad PPM header: no whitespace after P" + std::string(1, s[1]));
   }
   std::uint64_t fields[3];  // width, height, maxval
+  std::string_view maxval_text;  // as written: a value past 2^32 is read saturated
   const char* names[3] = {"width", "height", "maxval"};
   for (int i = 0; i < 3; ++i) {
     PpmNumber number = read_number(s, pos);
@@ -176,11 +177,13 @@ std::optional<Image> decode_ppm(std::string_view s, std::string* error, long lon
       return fail(error, std::string("bad PPM header: ") + names[i] + " " + shown(number.text) +
                              " is far too large");
     fields[i] = number.value;
+    maxval_text = number.text;
   }
   std::uint64_t width = fields[0], height = fields[1], maxval = fields[2];
   if (auto problem = size_problem(width, height, max_pixels)) return fail(error, *problem);
   if (maxval < 1 || maxval > 65535) {
-    return fail(error, "bad PPM header: maxval " + std::to_string(maxval) + " is not in 1..65535");
+    return fail(error, "bad PPM header: maxval " + std::string(maxval_text.substr(0, 20)) +
+                           " is not in 1..65535");
   }
   std::vector<std::uint8_t> to_8bit(maxval + 1);
   for (std::uint64_t v = 0; v <= maxval; ++v) to_8bit[v] = (v * 255 + maxval / 2) / maxval;
