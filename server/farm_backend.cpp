@@ -199,6 +199,22 @@ FarmBackend::FarmBackend(const Settings& s, int workers,
   farm::ConnectOptions requests = base;
   requests.command_timeout = milliseconds(2000);
   m.pool = std::make_unique<farm::Pool>(farm::farm_connect_options(requests, m.setup), 16);
+  // A password Redis refuses, an ACL user short of rights or a database it lacks are
+  // settings to fix, not an outage to wait out: the start stops with Redis's words. Redis
+  // down, or a farm of another build (an upgrade under way), is waited out.
+  {
+    farm::Connection probe(farm::farm_connect_options(requests, m.setup));
+    if (auto st = probe.connect(); !st) {
+      const farm::Error& e = st.error();
+      if (e.kind == farm::ErrorKind::Auth)
+        throw std::runtime_error("--redis " + m.url + " refused this node's credentials: " +
+                                 e.message +
+                                 " (the password comes from --redis-password-file or "
+                                 "RAYFARM_REDIS_PASSWORD; none is sent when neither is set)");
+      if (e.kind == farm::ErrorKind::NoPerm || e.kind == farm::ErrorKind::Config)
+        throw std::runtime_error("--redis " + m.url + ": " + e.message);
+    }
+  }
   farm::NodeConfig nc;
   nc.connect = base;
   nc.farm = m.config;

@@ -90,6 +90,20 @@ int main(int argc, char** argv) {
                settings->host.c_str(), port, service->health()["workers"].get<int>(),
                settings->results_dir.empty() ? "in memory" : settings->results_dir.c_str());
 
+  if (!settings->redis.empty()) {
+    // Whether the farm could be reached at start: a node that cannot answers 503 until then.
+    const nlohmann::json redis = service->health()["redis"];
+    const std::string node = redis.value("node", ""), status = redis.value("status", "");
+    if (status == "ok")
+      std::fprintf(stderr, "rayfarmd: farm node %s at %s\n", node.c_str(),
+                   redis.value("url", "").c_str());
+    else
+      std::fprintf(stderr,
+                   "rayfarmd: warning: farm node %s cannot reach %s (%s); it answers 503 until "
+                   "it can\n",
+                   node.c_str(), redis.value("url", "").c_str(),
+                   redis.value("error", status).c_str());
+  }
   const bool loopback = settings->host == "127.0.0.1" || settings->host == "localhost" ||
                         settings->host == "::1";
   if (!loopback && settings->tokens.empty() && settings->tokens_file.empty())

@@ -25,6 +25,12 @@ timeval to_timeval(milliseconds ms) {
   return tv;
 }
 
+// Redis's messages end in a full stop; one is not wanted before "; next attempt".
+std::string without_full_stop(std::string text) {
+  if (!text.empty() && text.back() == '.') text.pop_back();
+  return text;
+}
+
 bool setup_error(ErrorKind k) {
   return k == ErrorKind::Config || k == ErrorKind::Auth || k == ErrorKind::Build ||
          k == ErrorKind::NoPerm;
@@ -109,11 +115,25 @@ Status Connection::connect() {
     std::vector<std::string_view> auth{"AUTH"};
     if (!u.user.empty()) auth.push_back(u.user);
     auth.push_back(options_.password);
-    if (auto r = command(auth); !r) return fail(r.error());
+    if (auto r = command(auth); !r) {
+      // Any refusal of AUTH is the settings' to fix, whatever its first word: a password
+      // given to a Redis that has none answers "ERR AUTH <password> called without any
+      // password configured".
+      Error e = r.error();
+      if (!e.transient()) e.kind = ErrorKind::Auth;
+      return fail(e);
+    }
   }
   if (u.db != 0) {
     const std::string db = std::to_string(u.db);
-    if (auto r = command({"SELECT", db}); !r) return fail(r.error());
+    if (auto r = command({"SELECT", db}); !r) {
+      Error e = r.error();  // "ERR DB index is out of range": the URL's number
+      if (e.kind == ErrorKind::Reply) {
+        e.kind = ErrorKind::Config;
+        e.message += " (the URL's database " + db + ")";
+      }
+      return fail(e);
+    }
   }
   if (options_.on_connect)
     if (auto s = options_.on_connect(*this); !s) return fail(s.error());
@@ -133,9 +153,10 @@ Status Connection::ensure_connected() {
     const auto wait = std::chrono::duration_cast<milliseconds>(next_attempt_ - now).count();
     // Refused at setup (another build, a wrong password): that reason, not "unavailable".
     if (!refused_.empty())
-      return Error{ErrorKind::Unavailable, "the farm at " + options_.url.to_string() +
-                                               " refused this node: " + refused_ +
-                                               "; next attempt in " + std::to_string(wait) + " ms"};
+      return Error{ErrorKind::Unavailable,
+                   "the farm at " + options_.url.to_string() + " refused this node: " +
+                       without_full_stop(refused_) + "; next attempt in " +
+                       std::to_string(wait) + " ms"};
     return Error{ErrorKind::Unavailable, "Redis at " + options_.url.to_string() +
                                              " is unavailable; next attempt in " +
                                              std::to_string(wait) + " ms"};

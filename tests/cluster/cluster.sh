@@ -8,7 +8,8 @@
 # after a big one finishes first; (f) a node frozen past its lease: late results dropped; (g)
 # Redis out of memory: 503; (h) small and textured jobs stay on their node, seen from every
 # node; (j) a node killed rendering its own job: failed on every node, after its restart from
-# its results folder too. Usage: cluster.sh BUILD_DIR.
+# its results folder too; (k) a node whose password Redis refuses stops at its start. Usage:
+# cluster.sh BUILD_DIR.
 # Exit 77 (skipped) without redis-server, unless RAYFARM_REQUIRE_REDIS=1.
 set -euo pipefail
 # With pipefail, `A | grep -q` fails now and then: grep -q leaves at its first match and A
@@ -74,7 +75,20 @@ state_on() { curl -s "$(url "$1" "/jobs/$2")" | grep -o '"state": *"[a-z]*"' | a
 metric() { curl -s "$(url "$1" /metrics)" | awk -v m="$2" '$1 == m {print int($2)}'; }
 
 start_redis
+# (k) Credentials Redis refuses stop a node at its start, with Redis's words (this Redis has
+# no password to give); the nodes that join say so on their first lines.
+set +e
+refused=$(RAYFARM_REDIS_PASSWORD=x timeout 20 "$build/server/rayfarmd" --host 127.0.0.1 --port 0 \
+  --redis "unix://$sock" --node-id refused 2>&1)
+code=$?
+set -e
+[ "$code" = 1 ] || fail "a node with a password this Redis does not have: exit $code: $refused"
+[[ $refused == *"refused this node's credentials: ERR AUTH"* ]] || fail "its message: $refused"
 for n in 1 2 3; do start_node "$n"; done
+for n in 1 2 3; do
+  grep -q "farm node node$n at unix://" "$dir/node$n.log" || fail "node $n did not say it joined"
+done
+echo "cluster: (k) a password Redis refuses stops a node at start; the others said they joined"
 t0=$SECONDS
 
 # (a) a job of many units on node 1; node 2 (or 3) killed while it holds some.

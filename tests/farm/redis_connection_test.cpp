@@ -193,6 +193,37 @@ TEST_F(RedisConnection, ApplesAuthAndSelectOnEveryConnect) {
   EXPECT_EQ(c.command({"GET", "k"})->str(), "v");
 }
 
+// Settings Redis refuses at connect are told as settings (the node stops at start on them),
+// whatever words Redis chose: a password it has no use for, a database it does not have.
+TEST_F(RedisConnection, RefusalsAtConnectAreSettingErrors) {
+  RedisServer server;
+  ASSERT_TRUE(server.start());
+  ConnectOptions needless = server.options();
+  needless.password = "x";  // this Redis has no password: "ERR AUTH <password> called without"
+  Status s = Connection(needless).connect();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().kind, ErrorKind::Auth) << s.error().message;
+  ConnectOptions far = server.options();
+  far.url.db = 99;  // Redis has 16
+  s = Connection(far).connect();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().kind, ErrorKind::Config) << s.error().message;
+  EXPECT_NE(s.error().message.find("database 99"), std::string::npos) << s.error().message;
+  // Said again until the next attempt, without Redis's full stop before it.
+  RedisServer locked({"--requirepass", "s3cret"});
+  ASSERT_TRUE(locked.start());
+  ConnectOptions wrong = locked.options();
+  wrong.password = "nope";
+  Connection c(wrong);
+  ASSERT_FALSE(c.connect());
+  Status again = c.ensure_connected();
+  ASSERT_FALSE(again);
+  EXPECT_NE(again.error().message.find("refused this node: WRONGPASS"), std::string::npos)
+      << again.error().message;
+  EXPECT_NE(again.error().message.find("disabled; next attempt in"), std::string::npos)
+      << again.error().message;
+}
+
 TEST_F(RedisConnection, TellsNoPermFromOtherErrors) {
   RedisServer server({"--requirepass", "admin"});
   ASSERT_TRUE(server.start());
