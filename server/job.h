@@ -23,6 +23,10 @@ struct Job {
   Priority priority = Priority::normal;
   std::shared_ptr<const Scene> scene;
   RenderOptions options;
+  // Its image's content key while other jobs wait for this render of the same image
+  // (Service::in_flight_); empty otherwise.
+  std::string merge_key;
+  std::atomic<std::int64_t> mirrored_ns{0};  // when its progress was last given to them
 
   // Set by the scheduler; `mu` guards render, error and error_code.
   mutable std::mutex mu;

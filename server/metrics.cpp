@@ -86,6 +86,9 @@ std::string Metrics::render_text(const Gauges& g) const {
     << "# HELP rayfarm_cache_misses_total Cacheable renders that had to run.\n"
        "# TYPE rayfarm_cache_misses_total counter\n"
     << "rayfarm_cache_misses_total " << cache_misses_.load() << "\n"
+    << "# HELP rayfarm_jobs_merged_total Jobs that took the render of the same image under way "
+       "instead of rendering it again.\n# TYPE rayfarm_jobs_merged_total counter\n"
+    << "rayfarm_jobs_merged_total " << merged_.load() << "\n"
     << "# HELP rayfarm_cache_bytes Result bytes held in memory.\n# TYPE rayfarm_cache_bytes gauge\n"
     << "rayfarm_cache_bytes " << g.cache_bytes << "\n";
   o << "# HELP rayfarm_rejected_total Requests refused, by reason.\n"

@@ -16,6 +16,7 @@ class Metrics {
   void render_finished(const std::string& state, double seconds, std::uint64_t primary,
                        std::uint64_t shadow, std::uint64_t reflection);
   void cache(bool hit) { (hit ? cache_hits_ : cache_misses_).fetch_add(1); }
+  void merged() { merged_.fetch_add(1); }
   void rejected(const std::string& reason);
 
   struct Gauges {
@@ -41,7 +42,7 @@ class Metrics {
   double render_sum_ = 0;
   std::uint64_t render_count_ = 0;
   std::uint64_t rays_[3] = {0, 0, 0};
-  std::atomic<std::uint64_t> cache_hits_{0}, cache_misses_{0};
+  std::atomic<std::uint64_t> cache_hits_{0}, cache_misses_{0}, merged_{0};
 };
 
 }  // namespace rayfarm::server

@@ -82,7 +82,7 @@ void Service::restore() {
     run->priority = r.options.priority;
     run->scene = std::move(scene);
     run->options = r.options;
-    scheduler_->submit(std::move(run));
+    schedule(std::move(run), r.cache_key);
   }
   sweep_textures();  // of jobs that ended, or were never accepted, when the process died
 }

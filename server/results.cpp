@@ -19,6 +19,22 @@ bool Service::on_started(Job& job, const RenderStats& stats) {
     ++r.attempts;
   });
   if (rec && rec->cancel_requested) job.cancel_requested = true;
+  if (rec && !rec->cancel_requested && !job.merge_key.empty()) {
+    // The jobs waiting for this render run with it.
+    std::vector<std::string> ids;
+    {
+      std::lock_guard lock(mu_);
+      if (auto it = in_flight_.find(job.merge_key);
+          it != in_flight_.end() && it->second.leader == job.id)
+        for (const auto& f : it->second.followers) ids.push_back(f->id);
+    }
+    for (const std::string& id : ids)
+      jobs_->transition(id, {JobState::queued}, [&](JobRecord& r) {
+        r.state = JobState::running;
+        r.started_ms = rec->started_ms;
+        r.stats = stats;
+      });
+  }
   return rec && !rec->cancel_requested;
 }
 
@@ -103,6 +119,17 @@ void Service::on_finished(Job& job, RenderJob* render) {
     if (!render && !message.empty()) ++r.attempts;  // the scene could not be prepared
     r.textures.clear();
   });
+  // The jobs that waited for this render end as it did; canceled, it leaves the render to
+  // the first of them.
+  if (auto followers = take_followers(job); !followers.empty()) {
+    JobRecord ended = after ? *after : before.value_or(JobRecord{});
+    ended.state = state;
+    ended.error_code = code;
+    ended.error = message;
+    ended.cache_key = job.merge_key;
+    if (render) ended.stats = st;
+    end_followers(std::move(followers), ended, state == JobState::canceled);
+  }
   // Only a render needs the scene, and a final job never runs again.
   job.scene.reset();
   // After the final record is stored: a crash in between leaves files the next start sweeps,
@@ -125,6 +152,9 @@ std::shared_ptr<const std::string> Service::result_png(const JobRecord& job) {
 
 std::optional<Image> Service::current_image(const JobRecord& job) {
   if (auto render = scheduler_->render_of(job.id)) return render->image();
+  if (!is_final(job.state))
+    if (auto leader = leader_of(job.id, job.cache_key))
+      if (auto render = scheduler_->render_of(*leader)) return render->image();
   if (job.state == JobState::done) {
     auto png = result_png(job);
     if (!png) return std::nullopt;

@@ -41,7 +41,7 @@ Service::Service(Settings settings, Backends backends)
                                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   Scheduler::Hooks hooks;
   hooks.started = [this](Job& job, const RenderStats& st) { return on_started(job, st); };
-  hooks.progress = [this](Job& job, const RenderStats& st) { jobs_->update_progress(job.id, st); };
+  hooks.progress = [this](Job& job, const RenderStats& st) { on_progress(job, st); };
   hooks.finished = [this](Job& job, RenderJob* render) { on_finished(job, render); };
   // At most 4 jobs of a client render at once (more would only split its share further).
   scheduler_ = std::make_unique<Scheduler>(*queue_, "local", workers, 4, settings_.job_timeout,
@@ -96,7 +96,24 @@ ApiError Service::cancel(const std::string& id, const std::string& client) {
                      "the job has already " +
                          std::string(now->state == JobState::done ? "finished" : "failed"));
   }
-  scheduler_->cancel(id);
+  if (scheduler_->cancel(id)) return {};
+  // Waiting for another job's render of its image: it leaves the waiting jobs and ends here.
+  std::shared_ptr<Job> follower;
+  {
+    std::lock_guard lock(mu_);
+    if (auto it = in_flight_.find(job->cache_key); it != in_flight_.end()) {
+      auto& fs = it->second.followers;
+      auto f = std::find_if(fs.begin(), fs.end(), [&](const auto& x) { return x->id == id; });
+      if (f != fs.end()) {
+        follower = *f;
+        fs.erase(f);
+      }
+    }
+  }
+  if (follower) {
+    follower->cancel_requested = true;
+    on_finished(*follower, nullptr);
+  }
   return {};
 }
 

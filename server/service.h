@@ -127,7 +127,10 @@ class Service {
   // This process's farm node; null without --redis.
   FarmBackend* farm() const { return farm_.get(); }
   nlohmann::json status(const JobRecord& job) const {
-    return job_status(job, queue_position(job.id));
+    // A job waiting for another's render of its image is where that one is.
+    const auto leader = job.state == JobState::queued ? leader_of(job.id, job.cache_key)
+                                                      : std::nullopt;
+    return job_status(job, queue_position(leader ? *leader : job.id));
   }
 
   // A counted slot of `kind`; nullopt when all are taken.
@@ -183,7 +186,21 @@ class Service {
   void sweep_textures();
   void restore();
   bool on_started(Job& job, const RenderStats& stats);
+  void on_progress(Job& job, const RenderStats& stats);
   void on_finished(Job& job, RenderJob* render);
+  // Schedules a job, or (outside a farm, with a content key) has it wait for the render of
+  // the same image under way: then true.
+  bool schedule(std::shared_ptr<Job> run, const std::string& cache_key);
+  // The jobs waiting for `leader`'s render, taken off (none when it has none).
+  std::vector<std::shared_ptr<Job>> take_followers(const Job& leader);
+  // How many jobs wait for another's render: of `client`, or of all with null.
+  std::size_t followers_of(const std::string* client) const;
+  // The rendering job a waiting job follows, if it is one.
+  std::optional<std::string> leader_of(const std::string& id, const std::string& cache_key) const;
+  // Ends a job that waited for `leader`'s render: in its final state, or queued again to
+  // render itself (`requeue`).
+  void end_followers(std::vector<std::shared_ptr<Job>> followers, const JobRecord& leader,
+                     bool requeue);
   // Stops this node's render of a job (in a farm: a cancel heard from any node).
   void cancel_local(const std::string& id);
   void load_samples();
@@ -208,6 +225,15 @@ class Service {
   std::unordered_map<std::string, int> texture_refs_;
   // (client, Idempotency-Key) of submissions under way: a second one at once is a 409.
   std::set<std::pair<std::string, std::string>> keys_in_flight_;
+  // Renders under way by their image's content key, with the jobs of the same image that
+  // wait for them instead of rendering it again (a class submitting one scene, a grader's
+  // references): they share the render's state and progress, and end with it.
+  struct InFlight {
+    std::string leader;                          // the job rendering it
+    Priority priority = Priority::normal;        // its queue class
+    std::vector<std::shared_ptr<Job>> followers;  // in the order they came
+  };
+  std::unordered_map<std::string, InFlight> in_flight_;
 
   std::vector<Sample> samples_;
   std::atomic<int> streams_{0};

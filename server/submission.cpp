@@ -108,7 +108,8 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
                               const std::string& client, const TextureFiles& textures,
                               const SubmitHow& how, const std::string& digest) {
   // A farm counts both limits farm-wide, in its submit.
-  if (!farm_ && queue_->depth() + queue_->active() >=
+  // Jobs waiting for another's render count as the queued jobs they are to their clients.
+  if (!farm_ && queue_->depth() + queue_->active() + followers_of(nullptr) >=
       static_cast<size_t>(settings_.queue_capacity)) {
     metrics_.rejected("queue_full");
     ApiError e = api_error(429, "queue_full",
@@ -120,7 +121,7 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
   if (!farm_) {
     // The pool holds exactly the unfinished jobs: counting there costs the client's own
     // jobs, not every job kept for reading back (thousands on a busy day).
-    const auto mine = static_cast<long long>(queue_->jobs_of(client));
+    const auto mine = static_cast<long long>(queue_->jobs_of(client) + followers_of(&client));
     const int named_limit = roster_.max_jobs_of(client);  // a grader may have a larger quota
     if (mine >= (named_limit > 0 ? named_limit : settings_.max_jobs_per_client)) {
       metrics_.rejected("client_limit");
@@ -257,7 +258,7 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
   } else {
     job.textures = hashes;  // the text and textures are kept for re-runs
   }
-  if (!job.cache_key.empty() && !farm_) metrics_.cache(hit);
+  if (hit && !farm_) metrics_.cache(true);
   try {
     if (!hit) keep_textures(job.textures, *scene, textures);
     job = jobs_->create(std::move(job), scene_text);
@@ -275,7 +276,11 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
     run->priority = job.options.priority;
     run->scene = scene;
     run->options = options;
-    scheduler_->submit(std::move(run));
+    const bool waits = schedule(std::move(run), job.cache_key);
+    if (waits)
+      metrics_.merged();
+    else if (!job.cache_key.empty() && !farm_)
+      metrics_.cache(false);
   }
   return {job, {}};
 }

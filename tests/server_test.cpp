@@ -24,6 +24,7 @@
 #include <optional>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -814,7 +815,8 @@ TEST(ServerJobs, DeleteOfAQueuedJobCancelsIt) {
   ASSERT_EQ(wait_running(*other, first)["state"], "running");
   // Five of one client: the fifth waits (a client runs at most four jobs at once).
   std::vector<std::string> ids;
-  for (int i = 0; i < 5; ++i) ids.push_back(submit(*c, kLong));
+  for (int i = 1; i <= 5; ++i)
+    ids.push_back(submit(*c, kLong + std::string("&seed=") + std::to_string(i)));
   Json st = status_of(*c, ids.back());
   ASSERT_EQ(st["state"], "queued");
   EXPECT_GT(st["queue_position"].get<int>(), 0);
@@ -1039,6 +1041,114 @@ TEST(ServerCache, SameSceneAndOptionsAreACacheHit) {
   ASSERT_TRUE(m);
   const std::string& metrics = m->body;
   EXPECT_NE(metrics.find("rayfarm_cache_hits_total 1\n"), std::string::npos) << metrics;
+}
+
+// ---- Jobs of one image merged while it renders -------------------------------------------
+
+// A counter's value in /metrics (the first line that starts with `name`); -1 when absent.
+double metric_value(httplib::Client& c, const std::string& name) {
+  auto r = c.Get("/metrics");
+  if (!r) return -1;
+  std::istringstream lines(r->body);
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind(name + " ", 0) == 0) return std::atof(line.c_str() + name.size() + 1);
+  return -1;
+}
+
+// Some 0.4 s on two workers.
+constexpr const char* kMedium = "width=400&height=300&spp=64";
+
+// A class submits one scene at once: it renders once, and every job ends done with the image
+// `rayfarm render` writes for it.
+TEST(ServerMerge, OneImageSubmittedByAClassRendersOnce) {
+  TestServer server;
+  std::vector<std::unique_ptr<httplib::Client>> students;
+  std::vector<std::string> ids;
+  for (int i = 0; i < 12; ++i) {
+    students.push_back(server.client("student-" + std::to_string(i)));
+    ids.push_back(submit(*students.back(), kMedium));
+  }
+  const std::string expected =
+      local_render(kScene, {{"width", "400"}, {"height", "300"}, {"spp", "64"}});
+  int rendered = 0;
+  for (int i = 0; i < 12; ++i) {
+    const Json st = wait_final(*students[i], ids[i]);
+    ASSERT_EQ(st["state"], "done") << st.dump();
+    rendered += st["stats"]["cache"] == "miss";
+    auto image = students[i]->Get("/jobs/" + ids[i] + "/image");
+    ASSERT_TRUE(image);
+    ASSERT_EQ(image->status, 200);
+    EXPECT_TRUE(image->body == expected) << i;
+  }
+  EXPECT_EQ(rendered, 1);
+  auto c = server.client();
+  EXPECT_EQ(metric_value(*c, "rayfarm_jobs_finished_total{state=\"done\"}"), 1);
+  // Each of the others either waited for that render or came after it, from the cache.
+  EXPECT_EQ(metric_value(*c, "rayfarm_jobs_merged_total") +
+                metric_value(*c, "rayfarm_cache_hits_total"),
+            11);
+}
+
+// A job of an image under way runs with that render and shows its progress; canceled, it
+// ends alone. The render's own job canceled hands the render to a job that waited for it. A
+// job more urgent than the render under way renders its own.
+TEST(ServerMerge, AWaitingJobRunsWithTheRenderAndOutlivesItsCancel) {
+  Settings s = test_settings();
+  s.workers = 1;
+  TestServer server(s);
+  auto alice = server.client("alice"), bob = server.client("bob"), carol = server.client("carol"),
+       dave = server.client("dave");
+  const std::string a = submit(*alice, kLong);
+  ASSERT_EQ(wait_running(*alice, a)["state"], "running");
+  const std::string b = submit(*bob, kLong);
+  EXPECT_EQ(status_of(*bob, b)["state"], "running");
+  EXPECT_GT(wait_for(*bob, b, [](const Json& st) { return st["progress"] > 0; }, 10s)["progress"],
+            0);
+  EXPECT_EQ(metric_value(*bob, "rayfarm_jobs_merged_total"), 1);
+  const std::string c = submit(*carol, kLong + std::string("&priority=interactive"));
+  EXPECT_EQ(metric_value(*carol, "rayfarm_jobs_merged_total"), 1);  // carol's renders alone
+  const std::string d = submit(*dave, kLong + std::string("&priority=batch"));
+  EXPECT_EQ(metric_value(*dave, "rayfarm_jobs_merged_total"), 2);
+
+  ASSERT_EQ(code_of(bob->Delete("/jobs/" + b)), 200);
+  EXPECT_EQ(wait_final(*bob, b, 5s)["state"], "canceled");
+  EXPECT_EQ(status_of(*alice, a)["state"], "running");
+  EXPECT_EQ(status_of(*dave, d)["state"], "running");
+
+  // Started with alice's render; once that is canceled, dave's job renders itself from the
+  // start (a start of its own).
+  const Json with_alice = status_of(*dave, d);
+  EXPECT_EQ(with_alice["started_at"], status_of(*alice, a)["started_at"]);
+  std::this_thread::sleep_for(5ms);
+  ASSERT_EQ(code_of(alice->Delete("/jobs/" + a)), 200);
+  EXPECT_EQ(wait_final(*alice, a, 5s)["state"], "canceled");
+  const Json now = wait_for(*dave, d, [&](const Json& st) {
+    return st["state"] == "running" && st["started_at"] != with_alice["started_at"] &&
+           st["stats"]["rays"]["primary"] > 0;
+  }, 20s);
+  EXPECT_EQ(now["state"], "running") << now.dump();
+  EXPECT_NE(now["started_at"], with_alice["started_at"]) << now.dump();
+  ASSERT_EQ(code_of(dave->Delete("/jobs/" + d)), 200);
+  EXPECT_EQ(wait_final(*dave, d, 5s)["state"], "canceled");
+  ASSERT_EQ(code_of(carol->Delete("/jobs/" + c)), 200);
+  EXPECT_EQ(wait_final(*carol, c, 5s)["state"], "canceled");
+}
+
+// A render that fails fails the jobs that waited for it, with its error: the same scene and
+// options would fail the same way.
+TEST(ServerMerge, AFailedRenderFailsTheJobsThatWaitedForIt) {
+  Settings s = test_settings();
+  s.job_timeout = 0.5;
+  TestServer server(s);
+  auto alice = server.client("alice"), bob = server.client("bob");
+  const std::string a = submit(*alice, kLong);
+  const std::string b = submit(*bob, kLong);
+  const Json sa = wait_final(*alice, a), sb = wait_final(*bob, b);
+  ASSERT_EQ(sa["state"], "failed") << sa.dump();
+  ASSERT_EQ(sb["state"], "failed") << sb.dump();
+  EXPECT_EQ(sb["error"], sa["error"]);
+  EXPECT_EQ(sb["error"]["code"], "timeout");
+  EXPECT_EQ(metric_value(*alice, "rayfarm_jobs_merged_total"), 1);
 }
 
 TEST(ServerCache, ModelFileAndItsJsonTwinShareAnEntry) {
@@ -2378,7 +2488,7 @@ TEST(ServerTextures, QueuedTextureJobRendersWithItsTexturesAfterARestart) {
     auto c = server.client("alice");
     // Four long jobs take all of alice's running slots: her fifth stays queued.
     for (int i = 0; i < 4; ++i) {
-      fillers.push_back(submit(*c, kLong));
+      fillers.push_back(submit(*c, kLong + std::string("&seed=") + std::to_string(i)));
       ASSERT_EQ(wait_running(*c, fillers.back())["state"], "running");
     }
     auto r = c->Post("/render?spp=2", upload(kTexScene, files));
@@ -3738,9 +3848,10 @@ TEST(ServerPriority, AHigherClassStartsFirstWhateverItsArrival) {
   std::vector<std::string> ids;
   for (int i = 0; i < 4; ++i) ids.push_back(submit(*c, kLong + std::string("&seed=") + std::to_string(i)));
   for (const std::string& id : ids) wait_running(*c, id);
-  const std::string batch = submit(*c, kLong + std::string("&priority=batch"));
+  // (Seeds of their own: a job of an image being rendered would wait for that render.)
+  const std::string batch = submit(*c, kLong + std::string("&priority=batch&seed=8"));
   const std::string normal = submit(*c, kLong + std::string("&seed=9"));
-  const std::string interactive = submit(*c, kLong + std::string("&priority=interactive"));
+  const std::string interactive = submit(*c, kLong + std::string("&priority=interactive&seed=7"));
   EXPECT_EQ(status_of(*c, interactive)["queue_position"], 1);
   EXPECT_EQ(status_of(*c, normal)["queue_position"], 2);
   EXPECT_EQ(status_of(*c, batch)["queue_position"], 3);

@@ -139,7 +139,7 @@ void lint_reference_triangles(const Scene& scene, const RenderOptions& options,
     if (!t || t->plane) continue;
     auto v3 = [](const glm::dvec3& v) { return V3{v.x, v.y, v.z}; };
     const V3 a = v3(t->vertex[0]), b = v3(t->vertex[1]), c = v3(t->vertex[2]);
-    const V3 n = cpsc102::unit(cpsc102::cross(cpsc102::sub(b, a), cpsc102::sub(c, b)));
+    const V3 n = cpsc102::vertex_plane_normal(a, b, c);
     // Past the overflow the unit is 0 (times 1 / inf); past the underflow not a number, or
     // infinite where every component is tiny but not 0.
     if (const double d = cpsc102::dot(n, n); d > 0.5 && d < 2) continue;

@@ -107,7 +107,7 @@ struct Builder {
     if (t.plane) {
       plane_part(o, *t.plane);
     } else {  // the 2009 tri: the plane through its vertices
-      o.normal = unit(cross(sub(b, a), sub(c, b)));
+      o.normal = vertex_plane_normal(a, b, c);
       o.point = a;
       o.n_dot_point = dot(o.normal, o.point);
     }

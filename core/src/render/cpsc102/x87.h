@@ -49,5 +49,11 @@ inline V3 cross(const V3& a, const V3& b) {
 }
 // The point base + t·dir as the program computed a hit point.
 inline V3 along(const V3& base, const V3& dir, double t) { return add(base, scale(dir, t)); }
+// The unit normal of the plane through a triangle's vertices a, b, c, as the program found a
+// 2009 `tri`'s plane: the unit cross product of its edges b - a and c - b. Not finite, or
+// 0, where that product overflows or vanishes (the program then drew nothing).
+inline V3 vertex_plane_normal(const V3& a, const V3& b, const V3& c) {
+  return unit(cross(sub(b, a), sub(c, b)));
+}
 
 }  // namespace rayfarm::cpsc102

@@ -1,0 +1,130 @@
+// Jobs of the same image merged while it renders: a class that submits one scene at once, or a
+// grader rendering the same references for every student, renders it once. A job whose image
+// (its content key) is being rendered by another job waits for that render instead of
+// queueing its own: it runs when that one runs, shows its progress, and ends as it ends,
+// done with its image or failed with its error. Canceled by its own client, that job lets the
+// first job waiting for it render in its place. Outside a farm only: a farm's nodes render
+// its jobs' units wherever they are taken.
+#include "service.h"
+
+namespace rayfarm::server {
+namespace {
+
+// Followers' records are updated from the leader's progress at most this often: every tile
+// of a render shared by 200 jobs would otherwise wake every watcher 200 times.
+constexpr std::int64_t kMirrorEveryNs = 100'000'000;
+
+}  // namespace
+
+bool Service::schedule(std::shared_ptr<Job> run, const std::string& cache_key) {
+  if (farm_ || cache_key.empty()) {
+    scheduler_->submit(std::move(run));
+    return false;
+  }
+  std::string leader;
+  {
+    std::lock_guard lock(mu_);
+    auto [it, fresh] = in_flight_.try_emplace(cache_key);
+    if (fresh) {
+      it->second.leader = run->id;
+      it->second.priority = run->priority;
+      run->merge_key = cache_key;
+    } else if (it->second.priority <= run->priority) {  // the render is as urgent at least
+      it->second.followers.push_back(run);
+      leader = it->second.leader;
+    }
+    // (A job more urgent than the render under way renders its own: it would wait in the
+    // other's queue class.)
+  }
+  if (leader.empty()) {
+    scheduler_->submit(std::move(run));
+    return false;
+  }
+  // Joined a render already running: running too (a leader that ends meanwhile has ended
+  // this job already, and the transition finds it final).
+  if (auto l = jobs_->get(leader); l && l->state == JobState::running)
+    jobs_->transition(run->id, {JobState::queued}, [&](JobRecord& r) {
+      r.state = JobState::running;
+      r.started_ms = l->started_ms;  // when its render started
+      r.stats = l->stats;
+    });
+  return true;
+}
+
+std::vector<std::shared_ptr<Job>> Service::take_followers(const Job& leader) {
+  if (leader.merge_key.empty()) return {};
+  std::lock_guard lock(mu_);
+  auto it = in_flight_.find(leader.merge_key);
+  if (it == in_flight_.end() || it->second.leader != leader.id) return {};
+  std::vector<std::shared_ptr<Job>> followers = std::move(it->second.followers);
+  in_flight_.erase(it);
+  return followers;
+}
+
+std::optional<std::string> Service::leader_of(const std::string& id,
+                                              const std::string& cache_key) const {
+  if (cache_key.empty()) return std::nullopt;
+  std::lock_guard lock(mu_);
+  auto it = in_flight_.find(cache_key);
+  if (it == in_flight_.end()) return std::nullopt;
+  for (const auto& f : it->second.followers)
+    if (f->id == id) return it->second.leader;
+  return std::nullopt;
+}
+
+std::size_t Service::followers_of(const std::string* client) const {
+  std::size_t n = 0;
+  std::lock_guard lock(mu_);
+  for (const auto& [key, f] : in_flight_)
+    for (const auto& job : f.followers) n += !client || job->client == *client;
+  return n;
+}
+
+void Service::on_progress(Job& job, const RenderStats& stats) {
+  jobs_->update_progress(job.id, stats);
+  if (job.merge_key.empty()) return;
+  const std::int64_t now = std::chrono::steady_clock::now().time_since_epoch().count();
+  std::int64_t last = job.mirrored_ns.load();
+  if (now - last < kMirrorEveryNs || !job.mirrored_ns.compare_exchange_strong(last, now)) return;
+  std::vector<std::string> ids;
+  {
+    std::lock_guard lock(mu_);
+    auto it = in_flight_.find(job.merge_key);
+    if (it == in_flight_.end() || it->second.leader != job.id) return;
+    for (const auto& f : it->second.followers) ids.push_back(f->id);
+  }
+  for (const std::string& id : ids) jobs_->update_progress(id, stats);
+}
+
+void Service::end_followers(std::vector<std::shared_ptr<Job>> followers, const JobRecord& leader,
+                            bool requeue) {
+  for (auto& f : followers) {
+    const auto before = jobs_->get(f->id);
+    if (!before) continue;
+    if (requeue) {
+      // To render itself, from the start (the first one; the rest wait for it).
+      jobs_->transition(f->id, {JobState::running}, [](JobRecord& r) {
+        r.state = JobState::queued;
+        r.started_ms = 0;
+        r.stats = RenderStats{};
+      });
+      schedule(std::move(f), leader.cache_key);
+      continue;
+    }
+    auto after =
+        jobs_->transition(f->id, {JobState::queued, JobState::running}, [&](JobRecord& r) {
+          r.state = leader.state;
+          r.error_code = leader.error_code;
+          r.error = leader.error;
+          if (r.started_ms == 0) r.started_ms = leader.started_ms;
+          r.finished_ms = now_ms();
+          r.stats = leader.stats;
+          r.cache_hit = leader.state == JobState::done;  // its image is another job's render
+          r.textures.clear();
+        });
+    f->scene.reset();
+    if (after) release_textures(before->textures);
+  }
+}
+
+}  // namespace rayfarm::server
