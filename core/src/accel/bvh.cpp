@@ -7,6 +7,8 @@
 #include "accel/bvh.h"
 
 #include <array>
+#include <bit>
+#include <cstdint>
 #include <thread>
 
 namespace rayfarm {
@@ -83,14 +85,24 @@ struct BuildNode {
   float area() const { return box_area(lo, hi); }
 };
 
+// std::nextafter(f, -inf) and (f, +inf) for an f that is not NaN, and not the infinity it
+// steps away from, without a library call: six per primitive were a tenth of the build.
+float next_down(float f) {
+  if (f == 0) return -std::numeric_limits<float>::denorm_min();
+  const auto bits = std::bit_cast<std::uint32_t>(f);
+  return std::bit_cast<float>(f > 0 ? bits - 1 : bits + 1);
+}
+
+float next_up(float f) { return -next_down(-f); }
+
 float round_down(double v) {
   float f = static_cast<float>(v);
-  return static_cast<double>(f) > v ? std::nextafter(f, -kInf) : f;
+  return static_cast<double>(f) > v ? next_down(f) : f;
 }
 
 float round_up(double v) {
   float f = static_cast<float>(v);
-  return static_cast<double>(f) < v ? std::nextafter(f, kInf) : f;
+  return static_cast<double>(f) < v ? next_up(f) : f;
 }
 
 // The bin of a (doubled) centre on each axis. NaN (0 * inf) lands in bin 0.
