@@ -7,6 +7,8 @@
 // its jobs' units wherever they are taken.
 #include "service.h"
 
+#include <algorithm>
+
 namespace rayfarm::server {
 namespace {
 
@@ -21,34 +23,48 @@ bool Service::schedule(std::shared_ptr<Job> run, const std::string& cache_key) {
     scheduler_->submit(std::move(run));
     return false;
   }
-  std::string leader;
+  bool follows = false, rendered = false;
   {
     std::lock_guard lock(mu_);
     auto [it, fresh] = in_flight_.try_emplace(cache_key);
     if (fresh) {
-      it->second.leader = run->id;
-      it->second.priority = run->priority;
-      run->merge_key = cache_key;
+      // Rendered meanwhile, between this job's look at the cache and now: its image is there.
+      rendered = cache_.get(cache_key) || blobs_.has(BlobKind::image, cache_key);
+      if (rendered) {
+        in_flight_.erase(it);
+      } else {
+        it->second.leader = run->id;
+        it->second.priority = run->priority;
+        run->merge_key = cache_key;
+      }
     } else if (it->second.priority <= run->priority) {  // the render is as urgent at least
       it->second.followers.push_back(run);
-      leader = it->second.leader;
+      follows = true;
+      // Joined a render already running: running too. Under the lock, as the render's end
+      // takes its followers under it: that comes after, whatever it makes of this job.
+      if (auto l = jobs_->get(it->second.leader); l && l->state == JobState::running)
+        jobs_->transition(run->id, {JobState::queued}, [&](JobRecord& r) {
+          r.state = JobState::running;
+          r.started_ms = l->started_ms;  // when its render started
+          r.stats = l->stats;
+          ++r.attempts;  // a render that crashes the process counts against each of its jobs
+        });
     }
     // (A job more urgent than the render under way renders its own: it would wait in the
     // other's queue class.)
   }
-  if (leader.empty()) {
-    scheduler_->submit(std::move(run));
-    return false;
+  if (rendered) {
+    JobRecord hit;
+    hit.state = JobState::done;
+    hit.cache_key = cache_key;
+    hit.started_ms = now_ms();
+    hit.stats.finished = true;
+    hit.stats.spp_target = hit.stats.spp_done = run->options.spp;
+    end_followers({std::move(run)}, hit, false);
+    return true;
   }
-  // Joined a render already running: running too (a leader that ends meanwhile has ended
-  // this job already, and the transition finds it final).
-  if (auto l = jobs_->get(leader); l && l->state == JobState::running)
-    jobs_->transition(run->id, {JobState::queued}, [&](JobRecord& r) {
-      r.state = JobState::running;
-      r.started_ms = l->started_ms;  // when its render started
-      r.stats = l->stats;
-    });
-  return true;
+  if (!follows) scheduler_->submit(std::move(run));
+  return follows;
 }
 
 std::vector<std::shared_ptr<Job>> Service::take_followers(const Job& leader) {
@@ -101,9 +117,15 @@ void Service::end_followers(std::vector<std::shared_ptr<Job>> followers, const J
   for (auto& f : followers) {
     const auto before = jobs_->get(f->id);
     if (!before) continue;
+    if (before->cancel_requested) {  // canceled by its client while it was handed over
+      f->cancel_requested = true;
+      on_finished(*f, nullptr);
+      continue;
+    }
     if (requeue) {
       // To render itself, from the start (the first one; the rest wait for it).
-      jobs_->transition(f->id, {JobState::running}, [](JobRecord& r) {
+      jobs_->transition(f->id, {JobState::queued, JobState::running}, [](JobRecord& r) {
+        if (r.state == JobState::running) r.attempts = std::max(0, r.attempts - 1);
         r.state = JobState::queued;
         r.started_ms = 0;
         r.stats = RenderStats{};

@@ -33,6 +33,7 @@ bool Service::on_started(Job& job, const RenderStats& stats) {
         r.state = JobState::running;
         r.started_ms = rec->started_ms;
         r.stats = stats;
+        ++r.attempts;  // a render that crashes the process counts against each of its jobs
       });
   }
   return rec && !rec->cancel_requested;
@@ -64,7 +65,7 @@ void Service::on_finished(Job& job, RenderJob* render) {
   } else if (st.stop_reason == "canceled") {
     // Stopped by its client, or interrupted by a shutdown (a cancel that came after the
     // last tile does not discard a complete image).
-    state = canceled ? JobState::canceled : JobState::queued;
+    state = canceled || !scheduler_->interrupted() ? JobState::canceled : JobState::queued;
   } else {
     state = JobState::done;
   }
@@ -77,6 +78,14 @@ void Service::on_finished(Job& job, RenderJob* render) {
       r.started_ms = 0;
       r.stats = RenderStats{};
     });
+    // So are the jobs that waited for it (they wait again after the restart).
+    for (const auto& f : take_followers(job))
+      jobs_->transition(f->id, {JobState::running}, [](JobRecord& r) {
+        r.state = JobState::queued;
+        r.attempts = std::max(0, r.attempts - 1);
+        r.started_ms = 0;
+        r.stats = RenderStats{};
+      });
     return;
   }
   std::shared_ptr<const std::string> png;

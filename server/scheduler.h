@@ -41,6 +41,8 @@ class Scheduler {
   // The render in progress of a job this process runs (null otherwise).
   std::shared_ptr<RenderJob> render_of(const std::string& id) const;
   size_t active() const;
+  // A shutdown's grace period is over: the renders it stopped are to run again after a restart.
+  bool interrupted() const { return interrupt_.load(); }
   int workers() const { return static_cast<int>(threads_.size()); }
 
   // Shutdown: no queued job starts any more; returns when running renders ended or the

@@ -1134,11 +1134,38 @@ TEST(ServerMerge, AWaitingJobRunsWithTheRenderAndOutlivesItsCancel) {
   EXPECT_EQ(wait_final(*carol, c, 5s)["state"], "canceled");
 }
 
+// A shutdown puts a render and the jobs waiting for it back in the queue; after the restart
+// they wait for one render again.
+TEST(ServerMerge, JobsWaitingForARenderWaitAgainAfterARestart) {
+  test::TempDir dir;
+  Settings s = test_settings();
+  s.results_dir = dir.path.string();
+  std::string a, b;
+  {
+    TestServer server(s);
+    auto alice = server.client("alice"), bob = server.client("bob");
+    a = submit(*alice, kLong);
+    ASSERT_EQ(wait_running(*alice, a)["state"], "running");
+    b = submit(*bob, kLong);
+    ASSERT_EQ(status_of(*bob, b)["state"], "running");
+    server.stop();
+  }
+  TestServer server(s);
+  auto alice = server.client("alice"), bob = server.client("bob");
+  EXPECT_EQ(wait_running(*alice, a)["state"], "running");
+  EXPECT_EQ(wait_running(*bob, b)["state"], "running");
+  EXPECT_EQ(metric_value(*alice, "rayfarm_jobs_running"), 1);  // one render for both
+  ASSERT_EQ(code_of(bob->Delete("/jobs/" + b)), 200);
+  EXPECT_EQ(wait_final(*bob, b, 5s)["state"], "canceled");
+  ASSERT_EQ(code_of(alice->Delete("/jobs/" + a)), 200);
+  EXPECT_EQ(wait_final(*alice, a, 5s)["state"], "canceled");
+}
+
 // A render that fails fails the jobs that waited for it, with its error: the same scene and
 // options would fail the same way.
 TEST(ServerMerge, AFailedRenderFailsTheJobsThatWaitedForIt) {
   Settings s = test_settings();
-  s.job_timeout = 0.5;
+  s.job_timeout = 3;  // bob's job comes well within it, on a slow machine too
   TestServer server(s);
   auto alice = server.client("alice"), bob = server.client("bob");
   const std::string a = submit(*alice, kLong);

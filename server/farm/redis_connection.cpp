@@ -116,11 +116,15 @@ Status Connection::connect() {
     if (!u.user.empty()) auth.push_back(u.user);
     auth.push_back(options_.password);
     if (auto r = command(auth); !r) {
-      // Any refusal of AUTH is the settings' to fix, whatever its first word: a password
-      // given to a Redis that has none answers "ERR AUTH <password> called without any
-      // password configured".
+      // Refusals of the credentials are the settings' to fix, whatever their first word: a
+      // password given to a Redis that has none answers "ERR AUTH <password> called without
+      // any password configured". A Redis at maxclients answers this first command too.
       Error e = r.error();
-      if (!e.transient()) e.kind = ErrorKind::Auth;
+      if (e.message.starts_with("ERR AUTH") || e.message.starts_with("ERR Client sent AUTH") ||
+          e.message.starts_with("ERR invalid password"))
+        e.kind = ErrorKind::Auth;
+      else if (e.message.starts_with("ERR max number of clients"))
+        e.kind = ErrorKind::Unavailable;
       return fail(e);
     }
   }
@@ -128,7 +132,7 @@ Status Connection::connect() {
     const std::string db = std::to_string(u.db);
     if (auto r = command({"SELECT", db}); !r) {
       Error e = r.error();  // "ERR DB index is out of range": the URL's number
-      if (e.kind == ErrorKind::Reply) {
+      if (e.message.starts_with("ERR DB index") || e.message.starts_with("ERR invalid DB")) {
         e.kind = ErrorKind::Config;
         e.message += " (the URL's database " + db + ")";
       }

@@ -222,6 +222,17 @@ TEST_F(RedisConnection, RefusalsAtConnectAreSettingErrors) {
       << again.error().message;
   EXPECT_NE(again.error().message.find("disabled; next attempt in"), std::string::npos)
       << again.error().message;
+  // A Redis at its maxclients answers the first command, AUTH too, with an error: an outage
+  // to wait out, not the credentials' fault.
+  RedisServer full({"--maxclients", "1"});
+  ASSERT_TRUE(full.start());
+  Connection first(full.options());
+  ASSERT_TRUE(first.command({"PING"}));
+  ConnectOptions second = full.options();
+  second.password = "x";
+  Status busy = Connection(second).connect();
+  ASSERT_FALSE(busy);
+  EXPECT_EQ(busy.error().kind, ErrorKind::Unavailable) << busy.error().message;
 }
 
 TEST_F(RedisConnection, TellsNoPermFromOtherErrors) {
