@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <cmath>
 #include <cstdlib>
+#include <map>
+#include <mutex>
 #include <optional>
 #include <thread>
 
@@ -85,6 +87,10 @@ struct FarmBackend::Impl {
   std::unique_ptr<farm::FarmNode> node;
   std::string url;
   std::atomic<std::uint64_t> calls{0}, micros{0};
+  // Progress of this node's local renders not yet written to the farm (by the heartbeat),
+  // per mille; the last value written, so that only changes go.
+  std::mutex progress_mu;
+  std::map<std::string, int> progress_new, progress_sent;
 
   // Runs `f` with a farm client over a pooled connection; throws Unavailable when there is
   // none, or when the result is an error.
@@ -141,7 +147,17 @@ struct FarmBackend::Impl {
       r.warnings = warnings_from_json(nlohmann::json::parse(w, nullptr, false));
     r.error = text(f, "error");
     if (!r.error.empty()) r.error_code = text(f, "code").empty() ? "render_failed" : text(f, "code");
-    const long long units = std::max(1LL, number(f, "units")), done = number(f, "done");
+    long long units = std::max(1LL, number(f, "units")), done = number(f, "done");
+    long long seen = done;  // for the version, which only grows
+    if (text(f, "local") == "1") {
+      // Rendered by its node alone, which writes how far it has got with its heartbeats.
+      if (state == JobState::running) {
+        units = 1000;
+        done = seen = std::clamp(number(f, "permille"), 0LL, 999LL);
+      } else if (is_final(state)) {
+        seen = 1000;
+      }
+    }
     RenderStats& st = r.stats;
     st.spp_target = 1;
     st.tiles_per_pass = static_cast<int>(units);
@@ -158,7 +174,7 @@ struct FarmBackend::Impl {
         st.render_ms = static_cast<double>(r.finished_ms - r.started_ms);
     }
     // Grows with every unit done and every change of state: what watchers compare.
-    r.version = 1 + static_cast<std::uint64_t>(done) * 8 + static_cast<std::uint64_t>(rank);
+    r.version = 1 + static_cast<std::uint64_t>(seen) * 8 + static_cast<std::uint64_t>(rank);
     return r;
   }
 
@@ -224,6 +240,13 @@ FarmBackend::FarmBackend(const Settings& s, int workers,
   nc.cancel_poll = milliseconds(s.heartbeat_ms);  // a backstop: cancels come as messages
   nc.result_ttl = milliseconds(static_cast<long long>(s.result_ttl * 1000));
   nc.on_cancel = std::move(on_cancel);
+  nc.local_progress = [&m] {
+    std::lock_guard lock(m.progress_mu);
+    std::vector<std::pair<std::string, int>> changed(m.progress_new.begin(), m.progress_new.end());
+    for (const auto& [job, permille] : changed) m.progress_sent[job] = permille;
+    m.progress_new.clear();
+    return changed;
+  };
   m.node = std::make_unique<farm::FarmNode>(nc);
   m.node->start();
 }
@@ -341,6 +364,11 @@ bool FarmBackend::finish_local(const JobRecord& job, JobState state, const std::
                                const std::string& error, const std::string* png,
                                const RenderStats& st, int attempts) {
   Impl& m = *impl_;
+  {
+    std::lock_guard lock(m.progress_mu);
+    m.progress_new.erase(job.id);
+    m.progress_sent.erase(job.id);
+  }
   const auto ttl = milliseconds(static_cast<long long>(m.settings.result_ttl * 1000));
   farm::RecordRequest rr;
   rr.job = job.id;
@@ -441,6 +469,15 @@ std::shared_ptr<const std::string> FarmBackend::png(const std::string& key) {
   auto bytes = impl_->call([&](farm::FarmClient& fc) { return farm::job_png(fc, key); });
   if (!bytes) return nullptr;
   return std::make_shared<const std::string>(std::move(*bytes));
+}
+
+void FarmBackend::local_progress(const std::string& id, double fraction) {
+  Impl& m = *impl_;
+  const int permille = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 1000);
+  std::lock_guard lock(m.progress_mu);
+  if (auto it = m.progress_sent.find(id); it != m.progress_sent.end() && it->second == permille)
+    return;
+  m.progress_new[id] = permille;
 }
 
 bool FarmBackend::healthy(nlohmann::json& details) {

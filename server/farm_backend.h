@@ -57,6 +57,10 @@ class FarmBackend {
                     const std::string& error, const std::string* png, const RenderStats& stats,
                     int attempts = 5);
 
+  // How far this node's render of a local job has got (0-1): the other nodes see it after
+  // the next heartbeat. Never blocks on Redis.
+  void local_progress(const std::string& id, double fraction);
+
   // Throw Unavailable when Redis does not answer.
   std::optional<JobRecord> get(const std::string& id);
   std::vector<JobRecord> list(const std::string& client, size_t limit);

@@ -98,6 +98,7 @@ std::size_t Service::followers_of(const std::string* client) const {
 
 void Service::on_progress(Job& job, const RenderStats& stats) {
   jobs_->update_progress(job.id, stats);
+  if (farm_) farm_->local_progress(job.id, stats.progress());  // every job here is local
   if (job.merge_key.empty()) return;
   const std::int64_t now = std::chrono::steady_clock::now().time_since_epoch().count();
   std::int64_t last = job.mirrored_ns.load();

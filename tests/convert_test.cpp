@@ -310,8 +310,10 @@ TEST(Convert, KeepsA64BitSeedExact) {
 
 TEST(Convert, HandlesFiftyThousandMaterialsInLinearTime) {
   // Once quadratic: ordered_json finds keys by linear search (100,000 materials took 20 s to
-  // read and 11 s to write). Timed against reading the same scene as a model file, so
-  // sanitizers and machine load cancel out.
+  // read and 11 s to write; 50,000 some 8 s). Timed against reading the same scene as a
+  // model file, so that sanitizers and machine load mostly cancel out; the margin is wide
+  // (AddressSanitizer slows JSON's many small blocks most: 14 times the model file's time on
+  // a loaded machine), and a quadratic pass is still far beyond it.
   const int n = 50000;
   std::string text = "camera c { pixeldim 8 6 worlddim 8 6 viewpoint 4 3 5 }\n";
   for (int i = 0; i < n; ++i)
@@ -323,7 +325,7 @@ TEST(Convert, HandlesFiftyThousandMaterialsInLinearTime) {
   start = std::chrono::steady_clock::now();
   SceneDesc back = json_desc(write_json(desc));
   auto json_time = std::chrono::steady_clock::now() - start;
-  EXPECT_LT(json_time, 10 * model_time + std::chrono::seconds(2));
+  EXPECT_LT(json_time, 25 * model_time + std::chrono::seconds(3));
   Scene s = build(back);
   ASSERT_EQ(s.materials.size(), static_cast<size_t>(n));
   EXPECT_EQ(s.materials[n - 1].name, "m" + std::to_string(n - 1));

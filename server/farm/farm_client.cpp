@@ -1,5 +1,6 @@
 #include "farm_client.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <random>
@@ -330,6 +331,13 @@ Result<RecordStatus> FarmClient::record(const RecordRequest& q) {
 Result<bool> FarmClient::janitor_lock(std::chrono::milliseconds hold) {
   const std::string h = ms(hold);
   auto r = fcall("rf1_lock", {config_.node, h});
+  if (!r) return r.error();
+  return r->integer() == 1;
+}
+
+Result<bool> FarmClient::progress(std::string_view job, int permille) {
+  const std::string p = std::to_string(std::clamp(permille, 0, 1000));
+  auto r = fcall("rf1_progress", {config_.node, job, p});
   if (!r) return r.error();
   return r->integer() == 1;
 }

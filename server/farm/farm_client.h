@@ -176,6 +176,9 @@ class FarmClient {
   Result<RecordStatus> record(const RecordRequest& request);
   // True when this node holds the janitor lock for the next `hold` (taken or renewed).
   Result<bool> janitor_lock(std::chrono::milliseconds hold);
+  // Records how far (0-1000) this node's render of a local job has got; false when the job
+  // is not a local job of this node's that is running.
+  Result<bool> progress(std::string_view job, int permille);
 
   // The job's record, or nullopt when there is none.
   Result<std::optional<JobFields>> job(std::string_view id);

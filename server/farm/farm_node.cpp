@@ -371,6 +371,8 @@ void FarmNode::keep_alive() {
     next_beat = Clock::now() + config_.heartbeat;
     std::vector<std::string> entries;
     for (const auto& [entry, h] : held) entries.push_back(entry);
+    if (config_.local_progress)
+      for (const auto& [job, permille] : config_.local_progress()) (void)fc.progress(job, permille);
     const std::string info = nlohmann::json({{"workers", config_.workers}}).dump();
     if (auto lost = fc.heartbeat(info, config_.heartbeat * 3, entries)) {
       for (const std::string& entry : *lost) halt(entry);

@@ -78,6 +78,9 @@ struct NodeConfig {
   // Called with each job canceled anywhere, as the message arrives (a node's own renders of
   // local jobs stop there).
   std::function<void(const std::string&)> on_cancel;
+  // This node's renders of local jobs whose progress (0-1000) changed since the last call:
+  // written to the farm with each heartbeat, for the other nodes' views of them.
+  std::function<std::vector<std::pair<std::string, int>>()> local_progress;
 };
 
 struct NodeCounters {

@@ -527,6 +527,16 @@ local function lock(_, a)
   return 0
 end
 
+-- ARGV: P, node, job, permille -> 1, or 0 when it is not a local job running on `node`
+-- How far a job its accepting node renders alone has got, for every node's view of it.
+local function progress(_, a)
+  local jk = a[1] .. 'job:' .. a[3]
+  local f = redis.call('HMGET', jk, 'state', 'local', 'node')
+  if f[1] ~= 'running' or f[2] ~= '1' or f[3] ~= a[2] then return 0 end
+  redis.call('HSET', jk, 'permille', a[4])
+  return 1
+end
+
 -- Functions that free memory or keep leases alive still run when Redis is over maxmemory
 -- (allow-oom); those that grow the data set (submit, take's feed, complete's tiles) get OOM.
 local function reg(name, fn, flags)
@@ -545,4 +555,5 @@ reg('rf1_sweep', sweep, {'allow-oom'})
 reg('rf1_finish', finish, {'allow-oom'})
 reg('rf1_record', record)
 reg('rf1_lock', lock, {'allow-oom'})
+reg('rf1_progress', progress)
 reg('rf1_counts', counts, {'no-writes', 'allow-oom'})

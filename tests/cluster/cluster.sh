@@ -7,9 +7,9 @@
 # /healthz, and after a restart from the same AOF the farm works again; (e) a small job sent
 # after a big one finishes first; (f) a node frozen past its lease: late results dropped; (g)
 # Redis out of memory: 503; (h) small and textured jobs stay on their node, seen from every
-# node; (j) a node killed rendering its own job: failed on every node, after its restart from
-# its results folder too; (k) a node whose password Redis refuses stops at its start. Usage:
-# cluster.sh BUILD_DIR.
+# node; (j) a node's own job seen with its progress from the others, and killed rendering it:
+# failed on every node, after its restart from its results folder too; (k) a node whose
+# password Redis refuses stops at its start. Usage: cluster.sh BUILD_DIR.
 # Exit 77 (skipped) without redis-server, unless RAYFARM_REQUIRE_REDIS=1.
 set -euo pipefail
 # With pipefail, `A | grep -q` fails now and then: grep -q leaves at its first match and A
@@ -262,6 +262,15 @@ tex=$(cd scenes && curl -s -F scene=@textures.txt -F 'textures/bricks.ppm=@textu
   -F 'textures/checker.ppm=@textures/checker.ppm' -F 'textures/slide.ppm=@textures/slide.ppm' \
   "$(url 2 "/render?width=1280&height=960&spp=64")" | field '["id"]')
 for _ in $(seq 100); do [ "$(state_on 2 "$tex")" = running ] && break; sleep 0.05; done
+# Its progress, which node 2 writes with its heartbeats, is seen from the other nodes.
+progress_on() { curl -s "$(url "$1" "/jobs/$2")" | grep -o '"progress": *[0-9.e-]*' | sed 's/.*: *//'; }
+for _ in $(seq 100); do
+  awk -v p="$(progress_on 1 "$tex")" 'BEGIN { exit !(p > 0) }' && break
+  sleep 0.05
+done
+awk -v p="$(progress_on 1 "$tex")" 'BEGIN { exit !(p > 0 && p < 1) }' \
+  || fail "node 1 sees node 2's own running job at progress $(progress_on 1 "$tex") (node 2: $(progress_on 2 "$tex"))"
+echo "cluster: (j) node 2's own job seen at progress $(progress_on 1 "$tex") from node 1"
 kill -9 "${pids[2]}"; wait "${pids[2]}" 2>/dev/null || true; pids[2]=""
 for _ in $(seq 100); do [ "$(state_on 1 "$tex")" = failed ] && break; sleep 0.1; done
 curl -s "$(url 1 "/jobs/$tex")" | grep '"code": *"node_lost"' >/dev/null \

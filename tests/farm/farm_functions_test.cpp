@@ -414,6 +414,33 @@ TEST_F(FarmFunctions, ALocalJobCountsAgainstTheLimitUntilRecorded) {
   EXPECT_EQ(*n->record(r), RecordStatus::Forbidden);
 }
 
+// Only the node rendering a local job writes its progress, and only while it runs.
+TEST_F(FarmFunctions, ALocalJobsProgressIsItsNodesWhileItRuns) {
+  TestNode n = node("n1"), other = node("n2");
+  SubmitRequest q;
+  q.client = "A";
+  q.units = 0;
+  q.job = "mine";
+  q.fields = {{"node", "n1"}};
+  ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
+  EXPECT_EQ(*n->progress("mine", 420), true);
+  EXPECT_EQ(hget("job:mine", "permille"), "420");
+  EXPECT_EQ(*other->progress("mine", 10), false);  // not n2's job
+  EXPECT_EQ(*n->progress("nobody", 10), false);    // no such job: no record made
+  EXPECT_EQ(hget("job:nobody", "state"), "");
+  q.job = "spread";
+  q.units = 4;
+  ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
+  EXPECT_EQ(*n->progress("spread", 10), false);  // the farm's own units count for it
+  RecordRequest r;
+  r.job = "mine";
+  r.client = "A";
+  r.result = "png:m";
+  ASSERT_EQ(*n->record(r), RecordStatus::Recorded);
+  EXPECT_EQ(*n->progress("mine", 999), false);  // ended: a late heartbeat changes nothing
+  EXPECT_EQ(hget("job:mine", "permille"), "420");
+}
+
 TEST_F(FarmFunctions, TheSweepFailsALocalJobWhoseNodeIsGone) {
   TestNode n = node("n1");
   SubmitRequest q;
