@@ -12,6 +12,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "farm_node.h"
@@ -91,6 +92,7 @@ struct FarmBackend::Impl {
   // per mille; the last value written, so that only changes go.
   std::mutex progress_mu;
   std::map<std::string, int> progress_new, progress_sent;
+  std::set<std::string> progress_live;  // local jobs accepted here and not yet ended
 
   // Runs `f` with a farm client over a pooled connection; throws Unavailable when there is
   // none, or when the result is an error.
@@ -322,7 +324,11 @@ FarmBackend::Outcome FarmBackend::submit(JobRecord job, const std::string& scene
         m.call([&](farm::FarmClient& fc) { return farm::submit_job(fc, s); });
     switch (r.status) {
       case farm::SubmitStatus::Accepted: {
-        if (local) return {job, {}, false, true};
+        if (local) {
+          std::lock_guard lock(m.progress_mu);
+          m.progress_live.insert(job.id);
+          return {job, {}, false, true};
+        }
         auto rec = m.get(job.id);
         if (!rec) return {std::nullopt, unavailable("the job vanished after submission")};
         return {rec, {}, false};
@@ -368,6 +374,7 @@ bool FarmBackend::finish_local(const JobRecord& job, JobState state, const std::
     std::lock_guard lock(m.progress_mu);
     m.progress_new.erase(job.id);
     m.progress_sent.erase(job.id);
+    m.progress_live.erase(job.id);
   }
   const auto ttl = milliseconds(static_cast<long long>(m.settings.result_ttl * 1000));
   farm::RecordRequest rr;
@@ -475,7 +482,12 @@ void FarmBackend::local_progress(const std::string& id, double fraction) {
   Impl& m = *impl_;
   const int permille = static_cast<int>(std::clamp(fraction, 0.0, 1.0) * 1000);
   std::lock_guard lock(m.progress_mu);
-  if (auto it = m.progress_sent.find(id); it != m.progress_sent.end() && it->second == permille)
+  // Not after its end (a tile of another thread can report after it), and never backwards
+  // (threads' reports can cross): what the other nodes show only grows, as its version must.
+  if (!m.progress_live.count(id)) return;
+  if (auto it = m.progress_sent.find(id); it != m.progress_sent.end() && it->second >= permille)
+    return;
+  if (auto it = m.progress_new.find(id); it != m.progress_new.end() && it->second >= permille)
     return;
   m.progress_new[id] = permille;
 }

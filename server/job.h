@@ -27,6 +27,9 @@ struct Job {
   // (Service::in_flight_); empty otherwise.
   std::string merge_key;
   std::atomic<std::int64_t> mirrored_ns{0};  // when its progress was last given to them
+  // Times it was handed on by a render it waited for: a "running with it" that was decided
+  // before the last handover is stale and changes nothing.
+  std::atomic<int> handovers{0};
 
   // Set by the scheduler; `mu` guards render, error and error_code.
   mutable std::mutex mu;

@@ -18,12 +18,14 @@ constexpr std::int64_t kMirrorEveryNs = 100'000'000;
 
 }  // namespace
 
-bool Service::schedule(std::shared_ptr<Job> run, const std::string& cache_key) {
+Service::Scheduled Service::schedule(std::shared_ptr<Job> run, const std::string& cache_key) {
   if (farm_ || cache_key.empty()) {
     scheduler_->submit(std::move(run));
-    return false;
+    return Scheduled::queued;
   }
   bool follows = false, rendered = false;
+  std::string leader;
+  int handovers = 0;
   {
     std::lock_guard lock(mu_);
     auto [it, fresh] = in_flight_.try_emplace(cache_key);
@@ -40,15 +42,8 @@ bool Service::schedule(std::shared_ptr<Job> run, const std::string& cache_key) {
     } else if (it->second.priority <= run->priority) {  // the render is as urgent at least
       it->second.followers.push_back(run);
       follows = true;
-      // Joined a render already running: running too. Under the lock, as the render's end
-      // takes its followers under it: that comes after, whatever it makes of this job.
-      if (auto l = jobs_->get(it->second.leader); l && l->state == JobState::running)
-        jobs_->transition(run->id, {JobState::queued}, [&](JobRecord& r) {
-          r.state = JobState::running;
-          r.started_ms = l->started_ms;  // when its render started
-          r.stats = l->stats;
-          ++r.attempts;  // a render that crashes the process counts against each of its jobs
-        });
+      leader = it->second.leader;
+      handovers = run->handovers.load();
     }
     // (A job more urgent than the render under way renders its own: it would wait in the
     // other's queue class.)
@@ -61,10 +56,29 @@ bool Service::schedule(std::shared_ptr<Job> run, const std::string& cache_key) {
     hit.stats.finished = true;
     hit.stats.spp_target = hit.stats.spp_done = run->options.spp;
     end_followers({std::move(run)}, hit, false);
-    return true;
+    return Scheduled::answered;
   }
-  if (!follows) scheduler_->submit(std::move(run));
-  return follows;
+  if (!follows) {
+    scheduler_->submit(std::move(run));
+    return Scheduled::queued;
+  }
+  // Joined a render already running: running too (outside the lock: the record is written
+  // to disk). If the render ended meanwhile, its end has decided, and this changes nothing.
+  if (auto l = jobs_->get(leader); l && l->state == JobState::running)
+    mirror_running(*run, handovers, *l);
+  return Scheduled::waits;
+}
+
+void Service::mirror_running(Job& follower, int handovers, const JobRecord& leader) {
+  // The store applies transitions one at a time, and a handover counts before its own: one
+  // decided before it sees the count moved and leaves the record as the handover made it.
+  jobs_->transition(follower.id, {JobState::queued}, [&](JobRecord& r) {
+    if (follower.handovers.load() != handovers) return;
+    r.state = JobState::running;
+    r.started_ms = leader.started_ms;  // when its render started
+    r.stats = leader.stats;
+    ++r.attempts;  // a render that crashes the process counts against each of its jobs
+  });
 }
 
 std::vector<std::shared_ptr<Job>> Service::take_followers(const Job& leader) {
@@ -125,6 +139,7 @@ void Service::end_followers(std::vector<std::shared_ptr<Job>> followers, const J
     }
     if (requeue) {
       // To render itself, from the start (the first one; the rest wait for it).
+      f->handovers.fetch_add(1);
       jobs_->transition(f->id, {JobState::queued, JobState::running}, [](JobRecord& r) {
         if (r.state == JobState::running) r.attempts = std::max(0, r.attempts - 1);
         r.state = JobState::queued;
@@ -134,7 +149,8 @@ void Service::end_followers(std::vector<std::shared_ptr<Job>> followers, const J
       schedule(std::move(f), leader.cache_key);
       continue;
     }
-    auto after =
+      f->handovers.fetch_add(1);
+  auto after =
         jobs_->transition(f->id, {JobState::queued, JobState::running}, [&](JobRecord& r) {
           r.state = leader.state;
           r.error_code = leader.error_code;

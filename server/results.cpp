@@ -21,20 +21,14 @@ bool Service::on_started(Job& job, const RenderStats& stats) {
   if (rec && rec->cancel_requested) job.cancel_requested = true;
   if (rec && !rec->cancel_requested && !job.merge_key.empty()) {
     // The jobs waiting for this render run with it.
-    std::vector<std::string> ids;
+    std::vector<std::pair<std::shared_ptr<Job>, int>> followers;
     {
       std::lock_guard lock(mu_);
       if (auto it = in_flight_.find(job.merge_key);
           it != in_flight_.end() && it->second.leader == job.id)
-        for (const auto& f : it->second.followers) ids.push_back(f->id);
+        for (const auto& f : it->second.followers) followers.emplace_back(f, f->handovers.load());
     }
-    for (const std::string& id : ids)
-      jobs_->transition(id, {JobState::queued}, [&](JobRecord& r) {
-        r.state = JobState::running;
-        r.started_ms = rec->started_ms;
-        r.stats = stats;
-        ++r.attempts;  // a render that crashes the process counts against each of its jobs
-      });
+    for (const auto& [f, handovers] : followers) mirror_running(*f, handovers, *rec);
   }
   return rec && !rec->cancel_requested;
 }

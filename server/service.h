@@ -189,8 +189,12 @@ class Service {
   void on_progress(Job& job, const RenderStats& stats);
   void on_finished(Job& job, RenderJob* render);
   // Schedules a job, or (outside a farm, with a content key) has it wait for the render of
-  // the same image under way: then true.
-  bool schedule(std::shared_ptr<Job> run, const std::string& cache_key);
+  // the same image under way, or ends it with that image when it was rendered meanwhile.
+  enum class Scheduled { queued, waits, answered };
+  Scheduled schedule(std::shared_ptr<Job> run, const std::string& cache_key);
+  // Marks a job that waits for `leader`'s render running with it, unless it was handed on
+  // since `handovers` was read.
+  void mirror_running(Job& follower, int handovers, const JobRecord& leader);
   // The jobs waiting for `leader`'s render, taken off (none when it has none).
   std::vector<std::shared_ptr<Job>> take_followers(const Job& leader);
   // How many jobs wait for another's render: of `client`, or of all with null.

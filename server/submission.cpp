@@ -276,11 +276,11 @@ Submitted Service::submit_new(const std::string& scene_text, const Params& param
     run->priority = job.options.priority;
     run->scene = scene;
     run->options = options;
-    const bool waits = schedule(std::move(run), job.cache_key);
-    if (waits)
+    const Scheduled scheduled = schedule(std::move(run), job.cache_key);
+    if (scheduled == Scheduled::waits)
       metrics_.merged();
     else if (!job.cache_key.empty() && !farm_)
-      metrics_.cache(false);
+      metrics_.cache(scheduled == Scheduled::answered);
   }
   return {job, {}};
 }

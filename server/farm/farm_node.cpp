@@ -371,12 +371,13 @@ void FarmNode::keep_alive() {
     next_beat = Clock::now() + config_.heartbeat;
     std::vector<std::string> entries;
     for (const auto& [entry, h] : held) entries.push_back(entry);
-    if (config_.local_progress)
-      for (const auto& [job, permille] : config_.local_progress()) (void)fc.progress(job, permille);
     const std::string info = nlohmann::json({{"workers", config_.workers}}).dump();
     if (auto lost = fc.heartbeat(info, config_.heartbeat * 3, entries)) {
       for (const std::string& entry : *lost) halt(entry);
     }
+    // After the leases: how far this node's own jobs have got, for the other nodes' views.
+    if (config_.local_progress)
+      for (const auto& [job, permille] : config_.local_progress()) (void)fc.progress(job, permille);
     // The janitor: one node at a time, and only a lease after this node (re)connected, since
     // idle times include an outage of Redis.
     if (joined && Clock::now() - *joined >= config_.lease) {

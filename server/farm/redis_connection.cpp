@@ -132,7 +132,9 @@ Status Connection::connect() {
     const std::string db = std::to_string(u.db);
     if (auto r = command({"SELECT", db}); !r) {
       Error e = r.error();  // "ERR DB index is out of range": the URL's number
-      if (e.message.starts_with("ERR DB index") || e.message.starts_with("ERR invalid DB")) {
+      if (e.message.starts_with("ERR max number of clients")) {
+        e.kind = ErrorKind::Unavailable;
+      } else if (!e.transient()) {
         e.kind = ErrorKind::Config;
         e.message += " (the URL's database " + db + ")";
       }
