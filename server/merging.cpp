@@ -149,18 +149,17 @@ void Service::end_followers(std::vector<std::shared_ptr<Job>> followers, const J
       schedule(std::move(f), leader.cache_key);
       continue;
     }
-      f->handovers.fetch_add(1);
-  auto after =
-        jobs_->transition(f->id, {JobState::queued, JobState::running}, [&](JobRecord& r) {
-          r.state = leader.state;
-          r.error_code = leader.error_code;
-          r.error = leader.error;
-          if (r.started_ms == 0) r.started_ms = leader.started_ms;
-          r.finished_ms = now_ms();
-          r.stats = leader.stats;
-          r.cache_hit = leader.state == JobState::done;  // its image is another job's render
-          r.textures.clear();
-        });
+    f->handovers.fetch_add(1);
+    auto after = jobs_->transition(f->id, {JobState::queued, JobState::running}, [&](JobRecord& r) {
+      r.state = leader.state;
+      r.error_code = leader.error_code;
+      r.error = leader.error;
+      if (r.started_ms == 0) r.started_ms = leader.started_ms;
+      r.finished_ms = now_ms();
+      r.stats = leader.stats;
+      r.cache_hit = leader.state == JobState::done;  // its image is another job's render
+      r.textures.clear();
+    });
     f->scene.reset();
     if (after) release_textures(before->textures);
   }
