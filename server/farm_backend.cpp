@@ -85,14 +85,15 @@ struct FarmBackend::Impl {
   farm::FarmConfig config;
   std::shared_ptr<farm::FarmSetup> setup;
   std::unique_ptr<farm::Pool> pool;
-  std::unique_ptr<farm::FarmNode> node;
-  std::string url;
-  std::atomic<std::uint64_t> calls{0}, micros{0};
   // Progress of this node's local renders not yet written to the farm (by the heartbeat),
-  // per mille; the last value written, so that only changes go.
+  // per mille; the last value written, so that only changes go. Before the node, whose
+  // heartbeat reads them: they outlive it.
   std::mutex progress_mu;
   std::map<std::string, int> progress_new, progress_sent;
   std::set<std::string> progress_live;  // local jobs accepted here and not yet ended
+  std::unique_ptr<farm::FarmNode> node;
+  std::string url;
+  std::atomic<std::uint64_t> calls{0}, micros{0};
 
   // Runs `f` with a farm client over a pooled connection; throws Unavailable when there is
   // none, or when the result is an error.
