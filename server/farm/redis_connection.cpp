@@ -118,13 +118,11 @@ Status Connection::connect() {
     if (auto r = command(auth); !r) {
       // Refusals of the credentials are the settings' to fix, whatever their first word: a
       // password given to a Redis that has none answers "ERR AUTH <password> called without
-      // any password configured". A Redis at maxclients answers this first command too.
+      // any password configured".
       Error e = r.error();
       if (e.message.starts_with("ERR AUTH") || e.message.starts_with("ERR Client sent AUTH") ||
           e.message.starts_with("ERR invalid password"))
         e.kind = ErrorKind::Auth;
-      else if (e.message.starts_with("ERR max number of clients"))
-        e.kind = ErrorKind::Unavailable;
       return fail(e);
     }
   }
@@ -132,9 +130,7 @@ Status Connection::connect() {
     const std::string db = std::to_string(u.db);
     if (auto r = command({"SELECT", db}); !r) {
       Error e = r.error();  // "ERR DB index is out of range": the URL's number
-      if (e.message.starts_with("ERR max number of clients")) {
-        e.kind = ErrorKind::Unavailable;
-      } else if (!e.transient()) {
+      if (!e.transient()) {
         e.kind = ErrorKind::Config;
         e.message += " (the URL's database " + db + ")";
       }

@@ -49,6 +49,8 @@ ErrorKind classify_error_reply(std::string_view message) {
   if (word == "LOADING") return ErrorKind::Loading;
   if (word == "READONLY") return ErrorKind::ReadOnly;
   if (word == "WRONGPASS" || word == "NOAUTH") return ErrorKind::Auth;
+  // A Redis at maxclients answers a new connection's first command so, then closes it.
+  if (message.starts_with("ERR max number of clients")) return ErrorKind::Unavailable;
   // An error raised by a command inside a Function keeps the command's prefix.
   if (message.find("OOM command not allowed") != std::string_view::npos) return ErrorKind::Oom;
   return ErrorKind::Reply;

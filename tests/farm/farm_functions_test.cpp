@@ -414,14 +414,20 @@ TEST_F(FarmFunctions, ALocalJobCountsAgainstTheLimitUntilRecorded) {
   EXPECT_EQ(*n->record(r), RecordStatus::Forbidden);
 }
 
-// Only the node rendering a local job writes its progress, and only while it runs.
-TEST_F(FarmFunctions, ALocalJobsProgressIsItsNodesWhileItRuns) {
-  TestNode n = node("n1"), other = node("n2");
+// Client A's job rendered by `node` alone (units 0), as a farm node submits one.
+SubmitRequest local_job(const std::string& job, const std::string& node) {
   SubmitRequest q;
   q.client = "A";
   q.units = 0;
-  q.job = "mine";
-  q.fields = {{"node", "n1"}};
+  q.job = job;
+  q.fields = {{"node", node}};
+  return q;
+}
+
+// Only the node rendering a local job writes its progress, and only while it runs.
+TEST_F(FarmFunctions, ALocalJobsProgressIsItsNodesWhileItRuns) {
+  TestNode n = node("n1"), other = node("n2");
+  SubmitRequest q = local_job("mine", "n1");
   ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
   EXPECT_EQ(*n->progress("mine", 420), true);
   EXPECT_EQ(hget("job:mine", "permille"), "420");
@@ -443,11 +449,7 @@ TEST_F(FarmFunctions, ALocalJobsProgressIsItsNodesWhileItRuns) {
 
 TEST_F(FarmFunctions, TheSweepFailsALocalJobWhoseNodeIsGone) {
   TestNode n = node("n1");
-  SubmitRequest q;
-  q.client = "A";
-  q.units = 0;
-  q.job = "mine";
-  q.fields = {{"node", "n1"}};
+  SubmitRequest q = local_job("mine", "n1");
   ASSERT_EQ(n->submit(q)->status, SubmitStatus::Accepted);
   q.job = "lost";
   q.fields = {{"node", "ghost"}};
