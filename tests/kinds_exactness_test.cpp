@@ -366,6 +366,9 @@ void expect_same_buffered_shadows(const Scene& scene, Rng& rng, int rays, int& a
   const PreparedScene<T> fast = prepare_scene<T>(scene, RenderOptions{}, 0, 2);
   ASSERT_TRUE(fast.features.light_buffers);
   ASSERT_EQ(fast.light_buffers.size(), fast.lights.size());
+  // The buffers name what the hierarchy holds by its place there (the spheres, and the
+  // shapes where it holds them too).
+  ASSERT_TRUE(fast.blockers_in_leaf_order);
   const Tracer<T> a(loop), b(fast);
   const glm::dvec3 mid = (kLo + kHi) / 2.0;
   const T inf = std::numeric_limits<T>::infinity();

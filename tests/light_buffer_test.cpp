@@ -66,6 +66,7 @@ template <class T>
 Counts expect_same_shadows(const Scene& scene, Rng& rng, double extent, int rays) {
   const Pair<T> p = prepare_both<T>(scene);
   EXPECT_TRUE(p.fast.features.light_buffers);
+  EXPECT_EQ(p.fast.blockers_in_leaf_order, !p.fast.bvh.empty());
   EXPECT_TRUE(p.loop.light_buffers.empty());
   const Tracer<T> loop(p.loop), fast(p.fast);
   const int ns = static_cast<int>(p.loop.spheres.size());

@@ -23,7 +23,7 @@
 namespace rayfarm {
 
 struct LightBufferEntry {
-  std::int32_t blocker;  // index into the spheres the buffer was built from
+  std::int32_t blocker;  // index into the spheres the buffer was built from (or as renumbered)
   float near;           // no point of the widened sphere is nearer the light than this
 };
 

@@ -433,6 +433,25 @@ bool bounded_weights(const Scene& scene, const PreparedScene<T>& p) {
   return true;
 }
 
+// Renumbers the light buffers' blockers to places in the hierarchy's order (see
+// PreparedScene::blockers_in_leaf_order). Both are built by then, on whichever threads.
+template <class T>
+void renumber_blockers(PreparedScene<T>& p) {
+  if (p.light_buffers.empty() || p.bvh.empty()) return;
+  // The hierarchy numbers what it holds as the buffers do: the spheres, then the shapes.
+  const std::size_t n = p.bvh.order.size();
+  std::vector<std::int32_t> place(n);
+  for (std::size_t k = 0; k < n; ++k) place[p.bvh.order[k]] = static_cast<std::int32_t>(k);
+  auto renumber = [&](std::int32_t& blocker) {
+    if (static_cast<std::size_t>(blocker) < n) blocker = place[blocker];
+  };
+  for (LightBuffer& lb : p.light_buffers) {
+    for (LightBufferEntry& e : lb.entries) renumber(e.blocker);
+    for (std::int32_t& b : lb.around) renumber(b);
+  }
+  p.blockers_in_leaf_order = true;
+}
+
 }  // namespace
 
 template <class T>
@@ -580,6 +599,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
         build_ray_culling(p);
         build_sphere_bvh(p, 1);
       }
+      renumber_blockers(p);
     }
     f.bvh = !p.bvh.empty();
     if (p.shapes.size() >= kBvhMinShapes) build_shape_bvh(p);

@@ -294,9 +294,21 @@ class Tracer {
         return true;
     }
     if (buffered) {
-      // The buffer lists the spheres and, numbered after them, the other shapes.
+      // The buffer lists the spheres and, numbered after them, the other shapes; those the
+      // hierarchy holds by their place in it, where blockers_in_leaf_order says so.
       const int ns = static_cast<int>(s_.spheres.size()), shape_base = s_.shape_base();
+      const std::int32_t placed =
+          s_.blockers_in_leaf_order ? static_cast<std::int32_t>(s_.bvh_index.size()) : 0;
       auto blocker_blocks = [&](std::int32_t i) {
+        if (i < placed) {
+          const int object = s_.bvh_index[i];
+          if (object >= shape_base)
+            return shape_blocks_one(object - shape_base, o, d, from, dist) &&
+                   remember(last_blocker, object);
+          const PreparedSphere<T>& sp = s_.bvh_spheres[i];
+          const T t = sphere_t(o, d, sp.centre, sp.radius, object, from);
+          return t > 0 && t < dist && remember(last_blocker, object);
+        }
         return i < ns ? blocks(i) && remember(last_blocker, i)
                       : shape_blocks_one(i - ns, o, d, from, dist) &&
                             remember(last_blocker, shape_base + (i - ns));
