@@ -364,7 +364,7 @@ inline void prefetch8(const BvhNode8* nodes, std::int32_t child, std::int32_t co
 }
 
 // At most 7 entries are pushed per level.
-inline constexpr int kStack8 = 7 * kBvhMaxDepth + 8;
+inline constexpr int kStack8 = 7 * kBvhMaxDepth + 8;  // (+ 8: the fixed seven-entry copy)
 
 template <class Leaf>
 [[gnu::target("avx2")]] void closest8(const Bvh& bvh, const BvhRay& ray, float limit, Leaf& leaf) {
@@ -407,7 +407,10 @@ template <class Leaf>
           for (; m > 0 && e[m - 1].t_near < x.t_near; --m) e[m] = e[m - 1];
           e[m] = x;
         }
-        for (int q = 0; q < k - 1; ++q) stack[top + q] = e[q];
+        // All seven copied whatever k is (e's unused slots are zero): a fixed copy, not a
+        // loop the compiler turns into a slow string move; the unused slots are overwritten
+        // by the next pushes.
+        __builtin_memcpy(stack + top, e, 7 * sizeof(Entry));
         top += k - 1;
         cur = e[k - 1];
         continue;
