@@ -487,17 +487,21 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   }
   const ShapeMaker<T> make{scene, cam};
   // Room for all at once, not grown by doubling (which copies the array through every
-  // smaller block on the way).
-  p.spheres.reserve(scene.count<Sphere>());
-  p.sphere_materials.reserve(scene.count<Sphere>());
+  // smaller block on the way). Then the objects in one pass: each pass over a large scene's
+  // objects reads megabytes again (shallow-60k: 8 MB, six passes took 5 ms before the
+  // structures' builds could start; docs/performance.md).
+  std::size_t sphere_count = 0;
+  for (const Object& o : scene.objects) sphere_count += std::holds_alternative<Sphere>(o.shape);
+  p.spheres.reserve(sphere_count);
+  p.sphere_materials.reserve(sphere_count);
+  bool reflective = false, translucent = false;
   for (const Object& o : scene.objects) {
+    reflective |= nonzero(scene.materials[o.material].specular);
+    translucent |= scene.materials[o.material].transparency > 0;
     if (const Sphere* s = o.as<Sphere>()) {
       p.spheres.push_back({narrow<T>(s->center), narrow<T>(s->radius)});
       p.sphere_materials.push_back(o.material);
-    }
-  }
-  for (const Object& o : scene.objects) {
-    if (const Plane* pl = o.as<Plane>()) {
+    } else if (const Plane* pl = o.as<Plane>()) {
       p.planes.push_back({narrow<T>(unit_direction(pl->normal)), narrow<T>(pl->point), o.material});
     } else if (const TiledPlane* t = o.as<TiledPlane>()) {
       PreparedPlane<T> pp{narrow<T>(unit_direction(t->plane.normal)), narrow<T>(t->plane.point),
@@ -512,14 +516,12 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
       pp.tile_w = narrow<T>(t->tile.width);
       pp.tile_h = narrow<T>(t->tile.height);
       p.planes.push_back(pp);
-    }
-  }
-  for (PreparedPlane<T>& pl : p.planes) pl.point_scale = largest_coordinate(pl.point);
-  for (const Object& o : scene.objects)
-    if (auto shape = visit_shape(make, o.shape)) {
+    } else if (auto shape = visit_shape(make, o.shape)) {
       shape->material = o.material;
       p.shapes.push_back(*shape);
     }
+  }
+  for (PreparedPlane<T>& pl : p.planes) pl.point_scale = largest_coordinate(pl.point);
   bool any_light = false;
   for (const Light& l : scene.lights) {
     const Vec3<T> location = narrow<T>(l.location);
@@ -541,11 +543,6 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   }
 
   const bool objects = !scene.objects.empty();
-  bool reflective = false, translucent = false;
-  for (const Object& o : scene.objects) {
-    reflective |= nonzero(scene.materials[o.material].specular);
-    translucent |= scene.materials[o.material].transparency > 0;
-  }
   if (spent) std::vector<Object>().swap(*spent);  // nothing below reads the objects
 
   Features& f = p.features;
