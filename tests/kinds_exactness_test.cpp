@@ -369,7 +369,18 @@ void expect_same_buffered_shadows(const Scene& scene, Rng& rng, int rays, int& a
   // The buffers name what the hierarchy holds by its place there (the spheres, and the
   // shapes where it holds them too).
   ASSERT_TRUE(fast.blockers_in_leaf_order);
-  const Tracer<T> a(loop), b(fast);
+  // The same buffers numbered as they were built: the same answers, and the same blocker
+  // remembered (the first in the cell's order).
+  PreparedScene<T> built = fast;
+  const auto as_built = [&](std::int32_t& i) {
+    if (static_cast<std::size_t>(i) < built.bvh.order.size()) i = built.bvh.order[i];
+  };
+  for (LightBuffer& lb : built.light_buffers) {
+    for (LightBufferEntry& e : lb.entries) as_built(e.blocker);
+    for (std::int32_t& i : lb.around) as_built(i);
+  }
+  built.blockers_in_leaf_order = false;
+  const Tracer<T> a(loop), b(fast), c(built);
   const glm::dvec3 mid = (kLo + kHi) / 2.0;
   const T inf = std::numeric_limits<T>::infinity();
   for (int i = 0; i < rays; ++i) {
@@ -391,6 +402,12 @@ void expect_same_buffered_shadows(const Scene& scene, Rng& rng, int rays, int& a
       ASSERT_EQ(b.occluded(p, to, from, dist, &blocker, buffer.empty() ? nullptr : &buffer),
                 expected)
           << "ray " << i << " light " << l << " from object " << h.object;
+      int built_blocker = -1;
+      const LightBuffer& unplaced = built.light_buffers[l];
+      ASSERT_EQ(c.occluded(p, to, from, dist, &built_blocker,
+                           unplaced.empty() ? nullptr : &unplaced),
+                expected);
+      ASSERT_EQ(blocker, built_blocker) << "ray " << i << " light " << l;
       LightBuffer::Cell cell;
       answered += !buffer.empty() && buffer.lookup(glm::dvec3(p), cell);
       by_shapes += expected && blocker >= fast.shape_base();

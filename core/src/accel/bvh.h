@@ -364,7 +364,8 @@ inline void prefetch8(const BvhNode8* nodes, std::int32_t child, std::int32_t co
 }
 
 // At most 7 entries are pushed per level.
-inline constexpr int kStack8 = 7 * kBvhMaxDepth + 8;  // (+ 8: the fixed seven-entry copy)
+// (closest8 copies seven entries from the top whatever it pushes: within the same bound.)
+inline constexpr int kStack8 = 7 * kBvhMaxDepth + 8;
 
 template <class Leaf>
 [[gnu::target("avx2")]] void closest8(const Bvh& bvh, const BvhRay& ray, float limit, Leaf& leaf) {

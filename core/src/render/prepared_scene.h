@@ -184,6 +184,8 @@ std::vector<int> object_sources(const Scene& scene);
 
 // Puts the spheres behind a hierarchy (whatever their number), with the other shapes where
 // the scene has any (bvh_shapes); used by prepare_scene. `width` 4 or 8 (0: bvh_best_width()).
+// Light buffers already numbered by the hierarchy's order (blockers_in_leaf_order) hold for
+// the new one only if the spheres and shapes are those it was built from.
 template <class T>
 void build_sphere_bvh(PreparedScene<T>& scene, int threads, int width = 0);
 
