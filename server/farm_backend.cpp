@@ -232,6 +232,16 @@ FarmBackend::FarmBackend(const Settings& s, int workers,
                                  "RAYFARM_REDIS_PASSWORD; none is sent when neither is set)");
       if (e.kind == farm::ErrorKind::NoPerm || e.kind == farm::ErrorKind::Config)
         throw std::runtime_error("--redis " + m.url + ": " + e.message);
+    } else if (!s.node_id.empty()) {
+      // Two nodes under one name would renew and take each other's leases. (A default name
+      // holds the process's number and start: no other node has it.)
+      farm::FarmClient fc(probe, m.config);
+      if (auto running = fc.node_running(); running && *running)
+        throw std::runtime_error("--node-id " + s.node_id +
+                                 ": a running node of this farm has that name (its record " +
+                                 fc.key("node:" + s.node_id) +
+                                 " was renewed while this one waited): give each node a name "
+                                 "of its own");
     }
   }
   farm::NodeConfig nc;

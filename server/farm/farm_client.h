@@ -180,6 +180,13 @@ class FarmClient {
   // is not a local job of this node's that is running.
   Result<bool> progress(std::string_view job, int permille);
 
+  // Whether a running node of this farm has this client's node name: its record (node:NAME,
+  // which each heartbeat sets with a time to live of three heartbeats) is renewed while this
+  // waits two of its heartbeats. A record left by a node that stopped (killed, or
+  // restarted under the same name) runs out instead. No record: false at once. Plain
+  // commands: it may run before the library is loaded.
+  Result<bool> node_running();
+
   // The job's record, or nullopt when there is none.
   Result<std::optional<JobFields>> job(std::string_view id);
   // Stored unit results 0..units-1 (nullopt where none), read `chunk` at a time.

@@ -88,7 +88,18 @@ for n in 1 2 3; do start_node "$n"; done
 for n in 1 2 3; do
   grep -q "farm node node$n at unix://" "$dir/node$n.log" || fail "node $n did not say it joined"
 done
-echo "cluster: (k) a password Redis refuses stops a node at start; the others said they joined"
+# A second node under a running node's name stops at its start too (the restarts below, under
+# the names of nodes that were killed, start).
+set +e
+twin=$(timeout 20 "$build/server/rayfarmd" --host 127.0.0.1 --port 0 --workers 1 \
+  --redis "unix://$sock" --node-id node1 --heartbeat-ms 100 --lease-ms 600 2>&1)
+code=$?
+set -e
+[ "$code" = 1 ] || fail "a second node named node1: exit $code: $twin"
+[[ $twin == *"--node-id node1: a running node of this farm has that name"* ]] ||
+  fail "its message: $twin"
+echo "cluster: (k) a password Redis refuses stops a node at start, and so does a second node1;"\
+  "the others said they joined"
 t0=$SECONDS
 
 # (a) a job of many units on node 1; node 2 (or 3) killed while it holds some.

@@ -250,5 +250,34 @@ TEST_F(FarmNodes, AJobWhoseSceneIsGoneFailsAfterThreeTriesWithTheReason) {
   EXPECT_EQ(a->counters().units_failed.load(), 3u);
 }
 
+// A name is in use while a node of that name runs (its record is renewed), and free again once
+// it stops, its record left to run out (a node restarted under its name may start at once; a
+// second node under a running one's name may not: rayfarmd refuses it at start).
+TEST_F(FarmNodes, ANameIsInUseOnlyWhileItsNodeRuns) {
+  TestNode probe = node("twin");
+  auto running = probe->node_running();
+  ASSERT_TRUE(running) << running.error().message;
+  EXPECT_FALSE(*running);  // no record
+  const std::string record = prefix_ + "node:twin";
+  auto twin = start_node("twin", 1, 50ms, 250ms);
+  for (int i = 0; i < 500 && integer({"EXISTS", record}) == 0; ++i) std::this_thread::sleep_for(10ms);
+  ASSERT_EQ(integer({"EXISTS", record}), 1);
+  for (int round = 0; round < 3; ++round) {
+    running = probe->node_running();
+    ASSERT_TRUE(running) << running.error().message;
+    EXPECT_TRUE(*running) << "round " << round;
+  }
+  twin->stop();  // (its record left behind runs out, or has)
+  running = probe->node_running();
+  ASSERT_TRUE(running) << running.error().message;
+  EXPECT_FALSE(*running);
+  // A record a killed node left, with a long time to live: not renewed, so not running.
+  ASSERT_EQ(integer({"HSET", prefix_ + "renewal", "ghost", "300"}), 1);
+  ASSERT_TRUE(raw().command({"SET", prefix_ + "node:ghost", "{}", "PX", "60000"}));
+  running = node("ghost")->node_running();
+  ASSERT_TRUE(running) << running.error().message;
+  EXPECT_FALSE(*running);
+}
+
 }  // namespace
 }  // namespace rayfarm::farm::test
