@@ -236,12 +236,18 @@ FarmBackend::FarmBackend(const Settings& s, int workers,
       // Two nodes under one name would renew and take each other's leases. (A default name
       // holds the process's number and start: no other node has it.)
       farm::FarmClient fc(probe, m.config);
-      if (auto running = fc.node_running(); running && *running)
+      const auto running = fc.node_running();
+      if (running && *running)
         throw std::runtime_error("--node-id " + s.node_id +
                                  ": a running node of this farm has that name (its record " +
                                  fc.key("node:" + s.node_id) +
                                  " was renewed while this one waited): give each node a name "
                                  "of its own");
+      if (!running)
+        std::fprintf(stderr,
+                     "rayfarmd: warning: whether a running node is named %s was not found out "
+                     "(%s); this one starts\n",
+                     s.node_id.c_str(), running.error().message.c_str());
     }
   }
   farm::NodeConfig nc;

@@ -339,30 +339,29 @@ Result<bool> FarmClient::janitor_lock(std::chrono::milliseconds hold) {
 
 Result<bool> FarmClient::node_running() {
   const std::string record = key("node:" + config_.node);
-  auto first = c_.command({"PTTL", record});
+  auto expiry = [&]() -> Result<long long> {
+    auto r = c_.command({"PEXPIRETIME", record});
+    if (!r) return r.error();
+    return r->integer();
+  };
+  auto first = expiry();
   if (!first) return first.error();
-  if (first->integer() <= 0) return false;  // none (-2), or one that cannot run out (-1)
-  // Its heartbeat: a third of the time to live it renews the record with (rf1_heartbeat).
-  auto renewal = c_.command({"HGET", key("renewal"), config_.node});
-  if (!renewal) return renewal.error();
-  long long ttl = 3000;
-  if (!renewal->is_nil()) {
-    const std::string_view text = renewal->str();
-    std::from_chars(text.data(), text.data() + text.size(), ttl);
+  if (*first < 0) return false;  // none (-2), or one that cannot run out (-1)
+  auto left = c_.command({"PTTL", record});
+  if (!left) return left.error();
+  // Until the record runs out (a heartbeat renews it well before: it lives three), asked a
+  // few times a heartbeat: a renewal moves its expiry, which Redis's clock alone sets.
+  const long long life = std::max(0LL, left->integer());
+  const auto step = std::chrono::milliseconds(std::clamp(life / 12, 10LL, 250LL));
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(life + 100);
+  while (std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(step);
+    auto now = expiry();
+    if (!now) return now.error();
+    if (*now < 0) return false;  // ran out: nothing renewed it
+    if (*now != *first) return true;
   }
-  const long long beat = std::clamp(ttl / 3, 25LL, 10000LL);
-  // Two heartbeats: a running node renews within them even with one beat late.
-  const auto t0 = std::chrono::steady_clock::now();
-  std::this_thread::sleep_for(std::chrono::milliseconds(2 * beat));
-  auto second = c_.command({"PTTL", record});
-  if (!second) return second.error();
-  if (second->integer() <= 0) return false;
-  const long long waited = std::chrono::duration_cast<std::chrono::milliseconds>(
-                               std::chrono::steady_clock::now() - t0)
-                               .count();
-  // Left alone, the time to live runs down with the clock. A renewal a heartbeat or more after
-  // the one before puts it at least a heartbeat above that line.
-  return second->integer() > first->integer() - waited + beat / 2;
+  return false;
 }
 
 Result<bool> FarmClient::progress(std::string_view job, int permille) {

@@ -181,10 +181,10 @@ class FarmClient {
   Result<bool> progress(std::string_view job, int permille);
 
   // Whether a running node of this farm has this client's node name: its record (node:NAME,
-  // which each heartbeat sets with a time to live of three heartbeats) is renewed while this
-  // waits two of its heartbeats. A record left by a node that stopped (killed, or
-  // restarted under the same name) runs out instead. No record: false at once. Plain
-  // commands: it may run before the library is loaded.
+  // which each heartbeat sets with a time to live of three heartbeats) is renewed before it
+  // runs out, as the farm judges a node alive. A record left by a node that stopped (killed,
+  // or restarted under the same name) runs out instead: false then, after its rest of life.
+  // No record: false at once. Plain commands: it may run before the library is loaded.
   Result<bool> node_running();
 
   // The job's record, or nullopt when there is none.

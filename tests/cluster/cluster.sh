@@ -9,7 +9,8 @@
 # Redis out of memory: 503; (h) small and textured jobs stay on their node, seen from every
 # node; (j) a node's own job seen with its progress from the others, and killed rendering it:
 # failed on every node, after its restart from its results folder too; (k) a node whose
-# password Redis refuses stops at its start. Usage: cluster.sh BUILD_DIR.
+# password Redis refuses stops at its start, and so does one named as a running node (nodes
+# restarted under their own names, in (a), (b) and (j), start). Usage: cluster.sh BUILD_DIR.
 # Exit 77 (skipped) without redis-server, unless RAYFARM_REQUIRE_REDIS=1.
 set -euo pipefail
 # With pipefail, `A | grep -q` fails now and then: grep -q leaves at its first match and A

@@ -251,8 +251,8 @@ TEST_F(FarmNodes, AJobWhoseSceneIsGoneFailsAfterThreeTriesWithTheReason) {
 }
 
 // A name is in use while a node of that name runs (its record is renewed), and free again once
-// it stops, its record left to run out (a node restarted under its name may start at once; a
-// second node under a running one's name may not: rayfarmd refuses it at start).
+// it stops, its record left to run out (a node restarted under its name starts once it has; a
+// second node under a running one's name does not: rayfarmd refuses it at start).
 TEST_F(FarmNodes, ANameIsInUseOnlyWhileItsNodeRuns) {
   TestNode probe = node("twin");
   auto running = probe->node_running();
@@ -271,12 +271,13 @@ TEST_F(FarmNodes, ANameIsInUseOnlyWhileItsNodeRuns) {
   running = probe->node_running();
   ASSERT_TRUE(running) << running.error().message;
   EXPECT_FALSE(*running);
-  // A record a killed node left, with a long time to live: not renewed, so not running.
-  ASSERT_EQ(integer({"HSET", prefix_ + "renewal", "ghost", "300"}), 1);
-  ASSERT_TRUE(raw().command({"SET", prefix_ + "node:ghost", "{}", "PX", "60000"}));
+  // A record a killed node left: not renewed before it runs out, so not running.
+  ASSERT_TRUE(raw().command({"SET", prefix_ + "node:ghost", "{}", "PX", "1500"}));
+  const auto t0 = std::chrono::steady_clock::now();
   running = node("ghost")->node_running();
   ASSERT_TRUE(running) << running.error().message;
   EXPECT_FALSE(*running);
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, 1s);  // it waited for the record to run out
 }
 
 }  // namespace
