@@ -490,8 +490,7 @@ PreparedScene<T> prepare_scene(const Scene& scene, const RenderOptions& options,
   // smaller block on the way). Then the objects in one pass: each pass over a large scene's
   // objects reads megabytes again (shallow-60k: 8 MB, six passes took 5 ms before the
   // structures' builds could start; docs/performance.md).
-  std::size_t sphere_count = 0;
-  for (const Object& o : scene.objects) sphere_count += std::holds_alternative<Sphere>(o.shape);
+  const std::size_t sphere_count = scene.count<Sphere>();
   p.spheres.reserve(sphere_count);
   p.sphere_materials.reserve(sphere_count);
   bool reflective = false, translucent = false;

@@ -283,11 +283,12 @@ class Tracer {
       const T t = plane_t(o, d, s_.planes[j], base + j, from);
       if (t > 0 && t < dist) return true;
     }
-    auto blocks = [&](int i) {
-      const PreparedSphere<T>& sp = s_.spheres[i];
-      const T t = sphere_t(o, d, sp.centre, sp.radius, i, from);
+    // Whether sphere `object`, whose record is `sp` (in file order or the hierarchy's), blocks.
+    auto sphere_blocks = [&](const PreparedSphere<T>& sp, int object) {
+      const T t = sphere_t(o, d, sp.centre, sp.radius, object, from);
       return t > 0 && t < dist;
     };
+    auto blocks = [&](int i) { return sphere_blocks(s_.spheres[i], i); };
     if (last_blocker && *last_blocker >= 0) {
       const int last = *last_blocker;
       if (last < base ? blocks(last) : shape_blocks_one(last - s_.shape_base(), o, d, from, dist))
@@ -305,9 +306,7 @@ class Tracer {
           if (object >= shape_base)
             return shape_blocks_one(object - shape_base, o, d, from, dist) &&
                    remember(last_blocker, object);
-          const PreparedSphere<T>& sp = s_.bvh_spheres[i];
-          const T t = sphere_t(o, d, sp.centre, sp.radius, object, from);
-          return t > 0 && t < dist && remember(last_blocker, object);
+          return sphere_blocks(s_.bvh_spheres[i], object) && remember(last_blocker, object);
         }
         return i < ns ? blocks(i) && remember(last_blocker, i)
                       : shape_blocks_one(i - ns, o, d, from, dist) &&
