@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Write the benchmark set into a folder: scenes that vary what the acceleration structures
 see (reflective floors and walls under sphere clouds, clouds deep and shallow, tiny spheres
-with a few big ones, lights and the camera inside the cloud, the newer entity kinds), each
-one model file of 800 x 600 pixels.
+with a few big ones, lights and the camera inside the cloud, fewer and larger spheres, the
+newer entity kinds), each one model file of 800 x 600 pixels.
 
 Deterministic: the same arguments always give the same bytes (own splitmix64 generator,
 fixed seeds, fixed number formatting; no numpy, no dependence on Python's `random`).
@@ -264,6 +264,24 @@ def kinds_mix(rng):
     return s
 
 
+def deep_8k(rng):
+    """Fewer, larger spheres than the other clouds, in a block that reaches beyond the view
+    on every side, over a reflective floor: most of the time goes to the walks of the
+    reflection rays that spheres send, which no bins serve."""
+    s = Scene("8,000 spheres of radius .15-.45 in a block 10-50 units from the eye, over a "
+              "reflective floor, two lights")
+    s.materials(SHINY_CLOUD)
+    s.w("material floor\n{  ambient  2 2 2\n   diffuse  .5 .5 .5\n   specular .3 .3 .3\n}\n\n")
+    s.light("key", (-6, 16, 2), "8 8 8")
+    s.light("fill", (14, 6, 0), "4 4 4")
+    s.plane("ground", "floor", "0 1 0", "0 -2 0")
+    while s.count < 8000:
+        r = rng.uniform(0.15, 0.45)
+        c = (rng.uniform(-12, 20), rng.uniform(r - 1.99, 10), rng.uniform(-45, -5))
+        s.sphere(cloud_material(rng, s.count), c, r)
+    return s
+
+
 # name -> (what it stresses, generator, seed)
 SCENES = {
     "floor-100k": ("reflection rays off a floor under a deep cloud (the issue's unseen scene)", floor_100k, 1601),
@@ -272,6 +290,7 @@ SCENES = {
     "tiny-big-150k": ("many tiny spheres and a few big chrome ones: large rectangles, reflections off spheres", tiny_big_150k, 1604),
     "lights-inside-50k": ("three lights inside the cloud: dense light-buffer cells near each light", lights_inside_50k, 1605),
     "camera-inside-50k": ("the eye inside the cloud: spheres beside and behind the eye", camera_inside_50k, 1606),
+    "deep-8k": ("few large spheres deep over a floor: the walks of reflection rays off spheres", deep_8k, 1608),
     "kinds-mix": ("tiled plane, fplanes, triangles, revsurfs, spotlights among spheres", kinds_mix, 1607),
 }
 

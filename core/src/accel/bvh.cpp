@@ -68,6 +68,15 @@ struct Bounds {
   Box3 centres;
 };
 
+// A set's bins on each axis. A bin keeps the bounds of its boxes and of their centres: the
+// children's bounds are then unions of bins, with no pass over the children to find them.
+struct Bin {  // no initialisers: only the bins in use are cleared
+  Box3 box;
+  Box3 centres;
+  std::int32_t count;
+};
+using Bins = std::array<std::array<Bin, kBins>, 3>;
+
 // The binary tree, children side by side: inner nodes point at the first of two.
 struct BuildNode {
   // The box as plain floats: 32 bytes a node where a Box3 made it 48 (some 100,000 nodes
@@ -120,11 +129,14 @@ class Builder {
   // descendants are appended depth first (a child pair, then the first child's subtree,
   // then the second's). Returns the subtree's depth. `moved`: the range is in the scratch
   // array, where the last partition put it (partitions go back and forth between the two).
+  // `bins`: this thread's, for every set it splits. (As a local of split(), 4 KB at each
+  // level of the recursion, the bins of nested calls lay spread over the stack: the build
+  // 23.0 -> 21.4 ms for shallow-60k's spheres.)
   int build(std::vector<BuildNode>& nodes, std::size_t slot, std::size_t begin, std::size_t end,
-            const Bounds& b, int depth, int threads, bool moved = false) {
+            const Bounds& b, int depth, int threads, Bins& bins, bool moved = false) {
     nodes[slot].set_box(b.box);
     Bounds left, right;
-    const std::size_t mid = split(begin, end, b, depth, left, right, moved);
+    const std::size_t mid = split(begin, end, b, depth, bins, left, right, moved);
     if (mid == begin) {
       if (moved) std::copy(scratch_.begin() + begin, scratch_.begin() + end, refs_.begin() + begin);
       nodes[slot].index = static_cast<std::int32_t>(begin);
@@ -140,17 +152,20 @@ class Builder {
       const int left_threads = threads / 2;
       int left_depth = 0;
       std::thread worker([&] {
-        left_depth = build(left_nodes, 0, begin, mid, left, depth + 1, left_threads, moved);
+        Bins worker_bins;
+        left_depth =
+            build(left_nodes, 0, begin, mid, left, depth + 1, left_threads, worker_bins, moved);
       });
       const int right_depth =
-          build(right_nodes, 0, mid, end, right, depth + 1, threads - left_threads, moved);
+          build(right_nodes, 0, mid, end, right, depth + 1, threads - left_threads, bins, moved);
       worker.join();
       splice(nodes, first, left_nodes);
       splice(nodes, first + 1, right_nodes);
       return 1 + std::max(left_depth, right_depth);
     }
-    const int left_depth = build(nodes, first, begin, mid, left, depth + 1, 1, moved);
-    return 1 + std::max(left_depth, build(nodes, first + 1, mid, end, right, depth + 1, 1, moved));
+    const int left_depth = build(nodes, first, begin, mid, left, depth + 1, 1, bins, moved);
+    return 1 + std::max(left_depth,
+                        build(nodes, first + 1, mid, end, right, depth + 1, 1, bins, moved));
   }
 
  private:
@@ -169,7 +184,7 @@ class Builder {
 
   // Partitions [begin, end) into the other array (flipping `moved`) and returns where the
   // second child starts, with the bounds of both sides; `begin` means "make a leaf".
-  std::size_t split(std::size_t begin, std::size_t end, const Bounds& set, int depth,
+  std::size_t split(std::size_t begin, std::size_t end, const Bounds& set, int depth, Bins& bins,
                     Bounds& left, Bounds& right, bool& moved) {
     std::vector<Ref>& from = moved ? scratch_ : refs_;
     const Box3& box = set.box;
@@ -185,16 +200,8 @@ class Builder {
     if (depth >= kMedianDepth)
       return small ? begin : median_split(from, begin, end, axis, left, right);
 
-    // A bin keeps the bounds of its boxes and of their centres: the children's bounds are
-    // then unions of bins, with no pass over the children to find them.
-    struct Bin {  // no initialisers: only the nb bins in use are cleared
-      Box3 box;
-      Box3 centres;
-      std::int32_t count;
-    };
     const int nb = static_cast<int>(std::min<std::size_t>(kBins, count));
     const float last = static_cast<float>(nb - 1);
-    std::array<std::array<Bin, kBins>, 3> bins;
     for (auto& axis_bins : bins) std::fill_n(axis_bins.begin(), nb, Bin{Box3{}, Box3{}, 0});
     F4 scale = bvh_simd::splat(0.0f);
     for (int a = 0; a < 3; ++a)
@@ -477,8 +484,9 @@ Bvh build_bvh(std::size_t count, const std::function<BvhBox(std::size_t)>& box_o
     all.box.grow(r.box);
     all.centres.grow(r.centre2());
   }
+  Bins bins;
   const int depth = Builder(refs, std::max(1, options.max_leaf))
-                        .build(tree, 0, 0, refs.size(), all, 0, std::max(1, options.threads));
+                        .build(tree, 0, 0, refs.size(), all, 0, std::max(1, options.threads), bins);
 
   bvh.order.resize(refs.size());
   for (std::size_t i = 0; i < refs.size(); ++i) bvh.order[i] = refs[i].index;

@@ -140,7 +140,17 @@ ScreenBins build_screen_bins(const ScreenCamera& cam, std::span<const WidenedSph
   for (std::size_t i = 0; i < spheres.size(); ++i)
     near[i] = float_down(glm::length(spheres[i].centre - cam.eye) - spheres[i].radius);
   std::vector<std::uint32_t> fill(bins.start.begin(), bins.start.end() - 1);
-  for (std::int32_t i : order_by_near(near)) {  // so that each tile lists nearest first
+  // Nearest first, so that each tile lists nearest first. That order is no order in memory:
+  // each sphere's rectangle and near bound are asked for some places ahead (as the light
+  // buffers' build does).
+  const std::vector<std::int32_t> order = order_by_near(near);
+  constexpr std::size_t kAhead = 16;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    if (k + kAhead < order.size()) {
+      __builtin_prefetch(&rects[order[k + kAhead]]);
+      __builtin_prefetch(&near[order[k + kAhead]]);
+    }
+    const std::int32_t i = order[k];
     if (!visible[i]) continue;
     const Rect& r = rects[i];
     const ScreenBinEntry e{i, near[i], static_cast<std::uint16_t>(r.x0),

@@ -36,11 +36,17 @@ std::optional<double> parse_number(std::string_view token, std::string* why) {
   if (s.empty()) return fail("empty");
   std::string_view unsigned_part = s;
   if (unsigned_part[0] == '+' || unsigned_part[0] == '-') unsigned_part.remove_prefix(1);
-  if (equals_nocase(unsigned_part, "nan") || starts_with_nocase(unsigned_part, "nan("))
-    return fail("NaN is not allowed");
-  if (equals_nocase(unsigned_part, "inf") || equals_nocase(unsigned_part, "infinity"))
-    return fail("infinity is not allowed");
-  if (starts_with_nocase(unsigned_part, "0x")) return fail("hexadecimal numbers are not allowed");
+  // The words and prefixes the format forbids, named in the message. None starts with a digit
+  // but "0x" (the common case, a digit, is told apart by its first character).
+  const char first = unsigned_part.empty() ? '\0' : unsigned_part[0];
+  if (!is_digit(first)) {
+    if (equals_nocase(unsigned_part, "nan") || starts_with_nocase(unsigned_part, "nan("))
+      return fail("NaN is not allowed");
+    if (equals_nocase(unsigned_part, "inf") || equals_nocase(unsigned_part, "infinity"))
+      return fail("infinity is not allowed");
+  } else if (first == '0' && starts_with_nocase(unsigned_part, "0x")) {
+    return fail("hexadecimal numbers are not allowed");
+  }
 
   // While checking the form, gather the significant digits: when there are few enough and
   // the power of ten is small, mantissa * 10^k (or / 10^-k) is one correctly rounded
