@@ -265,9 +265,9 @@ def kinds_mix(rng):
 
 
 def deep_8k(rng):
-    """Fewer, larger spheres than the other clouds, in a block that reaches beyond the view
-    on every side, over a reflective floor: most of the time goes to the walks of the
-    reflection rays that spheres send, which no bins serve."""
+    """Fewer, larger spheres than the other clouds, in a block wider than the view near the
+    eye and taller than it, over a reflective floor: most of the time goes to the walks of
+    the reflection rays that spheres send, which no bins serve."""
     s = Scene("8,000 spheres of radius .15-.45 in a block 10-50 units from the eye, over a "
               "reflective floor, two lights")
     s.materials(SHINY_CLOUD)
